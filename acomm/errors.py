@@ -1,0 +1,25 @@
+# The one error hierarchy of acomm. Decoders raise only DecodeError (or a
+# subclass), so a caller that feeds bytes from the sea needs a single except.
+
+
+class AcommError(Exception):
+    pass
+
+
+class DecodeError(AcommError):
+    # Bytes that do not form a valid object: truncated, wrong version,
+    # lengths that lie, values out of range.
+    pass
+
+
+class CRCError(DecodeError):
+    # A frame whose checksum does not match; a DecodeError so that generic
+    # handlers drop it like any other damaged input.
+    pass
+
+
+class EncodeError(AcommError):
+    # A value that cannot be represented: out of range, too long, too many
+    # bits for the buffer. Raised instead of truncating silently (MicroPython's
+    # struct would truncate).
+    pass

@@ -1,0 +1,98 @@
+# Runs acomm's core tests on the MicroPython unix port (and on CPython, for a
+# sanity check): imports every tests/core/test_*.py, calls each test_*
+# function, and prints "micropython: N passed, N failed". Exit status 1 when
+# anything failed. MicroPython's unix build from PyPI has no unittest, and
+# the tests use plain asserts, so this is all the runner it needs.
+#
+#   micropython tools/mp_runtests.py [tests/core] [-k substring]
+
+import os
+import sys
+
+try:
+    import time
+
+    _ms = time.ticks_ms
+    _diff = time.ticks_diff
+except AttributeError:
+    _ms = lambda: int(time.monotonic() * 1000)  # noqa: E731
+    _diff = lambda a, b: a - b  # noqa: E731
+
+
+def _here():
+    f = __file__
+    i = f.rfind("/")
+    return f[:i] if i >= 0 else "."
+
+
+def _print_exc(e):
+    if hasattr(sys, "print_exception"):
+        sys.print_exception(e)
+    else:
+        import traceback
+
+        traceback.print_exception(type(e), e, e.__traceback__)
+
+
+def main(argv):
+    root = _here() + "/.."
+    dirs = []
+    pattern = None
+    i = 0
+    while i < len(argv):
+        if argv[i] == "-k":
+            pattern = argv[i + 1]
+            i += 2
+            continue
+        dirs.append(argv[i])
+        i += 1
+    if not dirs:
+        dirs = [root + "/tests/core"]
+    if root not in sys.path:
+        sys.path.insert(0, root)
+    passed = failed = 0
+    failures = []
+    impl = sys.implementation.name
+    for d in dirs:
+        sys.path.insert(0, d)
+        names = sorted(n for n in os.listdir(d) if n.startswith("test_") and n.endswith(".py"))
+        for fname in names:
+            modname = fname[:-3]
+            try:
+                mod = __import__(modname)
+            except Exception as e:
+                print("ERROR importing", modname)
+                _print_exc(e)
+                failed += 1
+                failures.append(modname)
+                continue
+            for name in sorted(dir(mod)):
+                if not name.startswith("test_"):
+                    continue
+                if pattern and pattern not in modname + "." + name:
+                    continue
+                fn = getattr(mod, name)
+                if not callable(fn):
+                    continue
+                t0 = _ms()
+                try:
+                    fn()
+                except Exception as e:
+                    failed += 1
+                    failures.append(modname + "." + name)
+                    print("FAIL", modname + "." + name)
+                    _print_exc(e)
+                    continue
+                passed += 1
+                dt = _diff(_ms(), t0)
+                if dt > 2000:
+                    print("slow", modname + "." + name, dt, "ms")
+        sys.path.pop(0)
+    for f in failures:
+        print("FAILED", f)
+    print("%s: %d passed, %d failed" % (impl, passed, failed))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
