@@ -1,0 +1,98 @@
+# `acomm bench <name> --json`: runs a benchmark workload on CPython in this
+# process and, for the figures that depend on the runtime, again as a script
+# under the MicroPython unix port; prints one JSON object per line:
+# {"name": ..., "value": ..., "unit": ...}. Figures measured in the same run
+# are comparable; across machines only ratios are.
+
+import importlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import acomm
+
+# name -> workload module (in acomm_cpython.workloads)
+BENCHES = {
+    "core": "core_workload",
+    "queue": "queue_workload",
+}
+
+
+def find_micropython():
+    here = os.path.join(os.path.dirname(sys.executable), "micropython")
+    if os.path.exists(here):
+        return here
+    return shutil.which("micropython")
+
+
+def _workload(name):
+    return importlib.import_module("acomm_cpython.workloads." + BENCHES[name])
+
+
+def run_micropython(modname, mp):
+    # The workload runs as a script; acomm and the workloads folder go on
+    # MICROPYPATH (.frozen keeps the built-in asyncio importable).
+    core_root = os.path.dirname(os.path.dirname(os.path.abspath(acomm.__file__)))
+    wl_dir = os.path.dirname(os.path.abspath(_workload_file(modname)))
+    env = dict(os.environ)
+    env["MICROPYPATH"] = ".frozen:%s:%s" % (core_root, wl_dir)
+    proc = subprocess.run(
+        [mp, "-X", "heapsize=8M", _workload_file(modname)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
+    if proc.returncode != 0:
+        raise RuntimeError("micropython workload %s failed:\n%s%s" % (modname, proc.stdout, proc.stderr))
+    out = []
+    for line in proc.stdout.splitlines():
+        line = line.strip()
+        if line.startswith("{"):
+            out.append(json.loads(line))
+    return out
+
+
+def _workload_file(modname):
+    import acomm_cpython.workloads as w
+
+    return os.path.join(os.path.dirname(w.__file__), modname + ".py")
+
+
+def run(names, emit):
+    mp = find_micropython()
+    for name in names:
+        mod = _workload(name)
+        per_runtime = getattr(mod, "PER_RUNTIME", ())
+
+        def cp_emit(n, v, u):
+            emit(n + "_cpython" if n in per_runtime else n, v, u)
+
+        mod.run(cp_emit)
+        if not per_runtime:
+            continue
+        if mp is None:
+            print("note: no micropython command found; MicroPython figures skipped", file=sys.stderr)
+            continue
+        for rec in run_micropython(BENCHES[name], mp):
+            if rec["name"] in per_runtime:
+                emit(rec["name"] + "_micropython", rec["value"], rec["unit"])
+
+
+def main(args):
+    names = list(BENCHES) if args.name == "all" else [args.name]
+    for n in names:
+        if n not in BENCHES:
+            print("unknown benchmark %r; choose from: all, %s" % (n, ", ".join(BENCHES)), file=sys.stderr)
+            return 2
+
+    def emit(name, value, unit):
+        if args.json:
+            print(json.dumps({"name": name, "value": round(value, 4) if isinstance(value, float) else value, "unit": unit}), flush=True)
+        else:
+            print("%-45s %12.4g %s" % (name, value, unit), flush=True)
+
+    run(names, emit)
+    return 0

@@ -1,0 +1,32 @@
+# The `acomm` command.
+import argparse
+import sys
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="acomm", description="acomm: communication runtime for underwater and surface robot networks")
+    sub = p.add_subparsers(dest="cmd")
+
+    b = sub.add_parser("bench", help="run a benchmark; prints JSON lines with --json")
+    b.add_argument("name", help="core, queue, or all")
+    b.add_argument("--json", action="store_true", help="one JSON object per line")
+
+    d = sub.add_parser("demo", help="run the demonstration scenario")
+    d.add_argument("--seed", type=int, default=1)
+    d.add_argument("--json", action="store_true", help="print the summary as JSON")
+
+    args = p.parse_args(argv)
+    if args.cmd == "bench":
+        from . import bench
+
+        return bench.main(args)
+    if args.cmd == "demo":
+        from . import demo
+
+        return demo.main(args)
+    p.print_help()
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

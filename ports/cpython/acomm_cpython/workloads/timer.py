@@ -1,0 +1,41 @@
+# Wall-clock microseconds on both runtimes, for benchmark workloads only
+# (the core never reads the clock).
+try:
+    from time import ticks_diff, ticks_us
+
+    def now_us():
+        return ticks_us()
+
+    def elapsed_us(t0):
+        return ticks_diff(ticks_us(), t0)
+
+except ImportError:
+    from time import perf_counter
+
+    def now_us():
+        return perf_counter() * 1e6
+
+    def elapsed_us(t0):
+        return perf_counter() * 1e6 - t0
+
+
+def rate(fn, min_us=300000):
+    # Calls fn() (which does `k` units of work and returns k) until min_us
+    # have passed; returns units per second.
+    units = 0
+    t0 = now_us()
+    while True:
+        units += fn()
+        dt = elapsed_us(t0)
+        if dt >= min_us:
+            return units * 1e6 / dt
+
+
+def emit_json(name, value, unit):
+    print('{"name": "%s", "value": %s, "unit": "%s"}' % (name, _num(value), unit))
+
+
+def _num(v):
+    if isinstance(v, float):
+        return "%.6g" % v
+    return "%d" % v
