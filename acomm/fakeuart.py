@@ -7,7 +7,8 @@
 # Faults are applied to what an end writes, per write call (a write is one
 # "frame" as the sender sees it): drop it, flip one random bit of it, split it
 # into chunks that arrive one millisecond apart, delay it. Noise can be
-# injected into an end's receive side. The receive buffer is bounded like a
+# injected into an end's receive side. uart_bus() joins several ends on one
+# shared line. The receive buffer is bounded like a
 # real UART's: bytes arriving when it is full are lost and counted as overruns.
 
 from .clock import ManualClock
@@ -18,7 +19,8 @@ from .prng import Prng
 class FakeUART:
     def __init__(self, rxbuf=1024, clock=None):
         self.clock = clock if clock is not None else ManualClock()
-        self.peer = None
+        self.peer = None  # the other end of a pair
+        self.peers = []  # every end that hears this one (a pair, or a bus)
         self._rx = bytearray()
         self._rxcap = rxbuf
         self._pending = []  # (ready_ms, bytes) in arrival order
@@ -60,11 +62,13 @@ class FakeUART:
             k = 0
             while i < n:
                 step = rng.range(1, self._split)
-                self.peer._arrive(ticks_add(now, self._delay + k), data[i : i + step])
+                for p in self.peers:
+                    p._arrive(ticks_add(now, self._delay + k), data[i : i + step])
                 i += step
                 k += 1
         else:
-            self.peer._arrive(ticks_add(now, self._delay), data)
+            for p in self.peers:
+                p._arrive(ticks_add(now, self._delay), data)
         return n
 
     # -- receiving side -----------------------------------------------------
@@ -132,4 +136,18 @@ def uart_pair(rxbuf=1024, clock=None):
     b = FakeUART(rxbuf, clk)
     a.peer = b
     b.peer = a
+    a.peers.append(b)
+    b.peers.append(a)
     return a, b
+
+
+def uart_bus(n, rxbuf=1024, clock=None):
+    # n ends on one shared line (a transparent radio channel, an RS-485 bus):
+    # what one end writes, every other end receives.
+    clk = clock if clock is not None else ManualClock()
+    ends = [FakeUART(rxbuf, clk) for _ in range(n)]
+    for e in ends:
+        for o in ends:
+            if o is not e:
+                e.peers.append(o)
+    return ends

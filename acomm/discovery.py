@@ -1,0 +1,92 @@
+# Node discovery (seed 000, the WHOI Micro-Modem scheme): a node that has had
+# nothing to send for one advert period broadcasts a compact advert; any frame
+# heard refreshes its source; a node not heard for `lost_after` of its own
+# advert periods becomes unavailable.
+#
+# Advert payload, 2 bytes: node id (0..254), then the sender's advert period
+# in units of 4 s (1..255, so up to 17 minutes), which tells listeners how
+# long silence may last before the node counts as lost.
+
+from .compat import const, ticks_diff
+from .errors import DecodeError
+from .events import AVAILABLE, UNAVAILABLE, UNKNOWN
+
+ADVERT_LEN = const(2)
+_PERIOD_UNIT_MS = const(4000)
+
+
+def encode_advert(node_id, period_ms):
+    units = (period_ms + _PERIOD_UNIT_MS - 1) // _PERIOD_UNIT_MS
+    if units < 1:
+        units = 1
+    elif units > 255:
+        units = 255
+    return bytes((node_id, units))
+
+
+def decode_advert(data):
+    if len(data) != ADVERT_LEN:
+        raise DecodeError("advert of %d bytes, expected %d" % (len(data), ADVERT_LEN))
+    if data[0] > 254:
+        raise DecodeError("advert from reserved node id 255")
+    if data[1] == 0:
+        raise DecodeError("advert with zero period")
+    return data[0], data[1] * _PERIOD_UNIT_MS
+
+
+class Discovery:
+    # Availability of the remote nodes heard on one link. Bounded: at most
+    # `capacity` nodes are tracked; further nodes are ignored (and counted)
+    # until a tracked one is lost and forgotten.
+    def __init__(self, period_ms, lost_after=3, capacity=32):
+        self.period_ms = period_ms
+        self.lost_after = lost_after
+        self._cap = capacity
+        self._nodes = {}  # node id -> [last_heard, their period, state]
+        self.ignored = 0
+
+    def heard(self, node_id, now, period_ms=None):
+        # Returns AVAILABLE when the node just became available, else None.
+        e = self._nodes.get(node_id)
+        if e is None:
+            if len(self._nodes) >= self._cap and not self._forget_one():
+                self.ignored += 1
+                return None
+            e = [now, period_ms or self.period_ms, UNKNOWN]
+            self._nodes[node_id] = e
+        e[0] = now
+        if period_ms:
+            e[1] = period_ms
+        if e[2] != AVAILABLE:
+            e[2] = AVAILABLE
+            return AVAILABLE
+        return None
+
+    def _forget_one(self):
+        for k in self._nodes:
+            if self._nodes[k][2] == UNAVAILABLE:
+                del self._nodes[k]
+                return True
+        return False
+
+    def poll(self, now):
+        # Node ids that just became unavailable.
+        lost = None
+        for k in self._nodes:
+            e = self._nodes[k]
+            if e[2] == AVAILABLE and ticks_diff(now, e[0]) >= e[1] * self.lost_after:
+                e[2] = UNAVAILABLE
+                if lost is None:
+                    lost = []
+                lost.append(k)
+        return lost or ()
+
+    def state(self, node_id):
+        e = self._nodes.get(node_id)
+        return UNKNOWN if e is None else e[2]
+
+    def available(self):
+        return [k for k in self._nodes if self._nodes[k][2] == AVAILABLE]
+
+    def advert_due(self, now, last_tx):
+        return last_tx is None or ticks_diff(now, last_tx) >= self.period_ms

@@ -1,0 +1,94 @@
+# Driver for a transparent byte pipe: a serial cable, or a half-duplex
+# serial radio modem of the MaxStream kind (seed 002) that puts on the air
+# whatever bytes it is given. The pipe has no addressing and no integrity, so
+# the link above sends raw acomm frames (addresses + CRC) and this driver only
+# delimits them with SLIP and models the time the bytes take on the line.
+
+from ..caps import CAP_BROADCAST, Capabilities
+from ..compat import const, ticks_add, ticks_diff
+from ..events import EV_RX, EV_TX_DONE
+from ..slip import SlipDecoder, encode_into
+from ..errors import EncodeError
+
+_OUT_CAP = const(1024)
+
+
+class TransparentDriver:
+    def __init__(self, baud=9600, mtu=255, turnaround_ms=0, model="transparent serial"):
+        self.baud = baud
+        self.mtu = mtu
+        self.turnaround_ms = turnaround_ms
+        # 8N1: ten bits on the line per byte
+        self.caps = Capabilities(
+            manufacturer="generic",
+            model=model,
+            mtu_tx=mtu,
+            mtu_rx=mtu,
+            bitrate=baud * 8 // 10,
+            latency_ms=turnaround_ms + (mtu * 10 * 1000) // baud // 2,
+            flags=CAP_BROADCAST,
+        )
+        self.broadcast_addr = None
+        self._dec = SlipDecoder(mtu + 8)
+        self._frames = []
+        self._events = []
+        self._out = bytearray()
+        self._slip = bytearray(2 * mtu + 2)
+        self._busy_until = None
+        self._handle = 0
+        self._tx_handle = None
+        self.tx_frames = 0
+        self.rx_frames = 0
+        self.output_overruns = 0
+
+    def airtime_ms(self, nbytes):
+        return (nbytes * 10 * 1000 + self.baud - 1) // self.baud + self.turnaround_ms
+
+    def ready(self, now):
+        return self._tx_handle is None
+
+    def send(self, now, addr, data, ack=False):
+        if len(data) > self.mtu:
+            raise EncodeError("%d bytes exceed the MTU of %d" % (len(data), self.mtu))
+        n = encode_into(self._slip, data)
+        if len(self._out) + n > _OUT_CAP:
+            # the host is not draining our output: drop rather than grow
+            self.output_overruns += 1
+            raise EncodeError("output buffer full")
+        self._out.extend(memoryview(self._slip)[:n])
+        self._handle = (self._handle + 1) & 0xFFFF
+        self._tx_handle = self._handle
+        self._busy_until = ticks_add(now, self.airtime_ms(n))
+        self.tx_frames += 1
+        return self._handle
+
+    def feed(self, now, data):
+        frames = self._frames
+        if self._dec.feed(data, frames):
+            for f in frames:
+                self._events.append((EV_RX, None, None, f))
+                self.rx_frames += 1
+            frames.clear()
+
+    def poll(self, now):
+        if self._tx_handle is not None and ticks_diff(now, self._busy_until) >= 0:
+            self._events.append((EV_TX_DONE, self._tx_handle))
+            self._tx_handle = None
+
+    def take_events(self):
+        ev = self._events
+        if not ev:
+            return ev
+        self._events = []
+        return ev
+
+    def take_output(self):
+        if not self._out:
+            return b""
+        out = bytes(self._out)
+        self._out = bytearray()
+        return out
+
+    @property
+    def decoder_stats(self):
+        return (self._dec.frames, self._dec.oversize, self._dec.bad_escapes)

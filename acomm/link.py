@@ -1,0 +1,565 @@
+# One Link per interface: the low-level transport of seed 000 section III.
+#
+# A Link wraps a sans-IO driver and gives the layers above the eight
+# primitives: capability advertisement, frame received, frame transmission
+# request, request status, ranging request and range received, cancellation,
+# and link availability. It owns the bounded priority transmit queue, frames
+# payloads (raw acomm frames on links without addressing or integrity, the
+# one-byte elided header on modems that have both), acknowledges frames on
+# raw links, suppresses duplicates, and runs node discovery.
+#
+# The link is non-preemptive and half-duplex: one frame (or ping) is on the
+# air at a time; the next is chosen only when the driver is ready again, so a
+# new alarm waits for at most the frame already on the air.
+#
+# Every accepted request ends with exactly one final status (transmitted,
+# delivered, expired, canceled, failed); refusals are reported as `failed`
+# at once. Events go to `listener(event_tuple)` (see acomm.events).
+
+from . import frame as fr
+from .caps import CAP_ADDRESSING, CAP_DISCOVERY, CAP_RANGING, CAP_RELIABLE
+from .compat import const, ticks_add, ticks_diff
+from .discovery import Discovery, decode_advert, encode_advert
+from .errors import AcommError, DecodeError
+from .events import (
+    AVAILABLE,
+    CANCELED,
+    DELIVERED,
+    EV_AVAILABILITY,
+    EV_CAPS,
+    EV_DELIVERED,
+    EV_DRIVER_DOWN,
+    EV_DRIVER_UP,
+    EV_RANGE,
+    EV_RANGE_RECEIVED,
+    EV_RECEIVED,
+    EV_RX,
+    EV_STATUS,
+    EV_TX_DONE,
+    EV_TX_FAILED,
+    EXPIRED,
+    FAILED,
+    QUEUED,
+    TRANSMITTED,
+    TRANSMITTING,
+    UNAVAILABLE,
+    WAITING,
+)
+from .names import AddressMap
+from .txqueue import TxQueue, TxRequest
+
+BROADCAST = "*"  # destination name meaning every node on the link
+_MAX_LIFESPAN_MS = const(1 << 28)  # 3.1 days: the queue's wrap-safe horizon
+_DUP_SLOTS = const(8)  # recent sequence numbers remembered per source
+_MAX_PENDING_ACKS = const(4)
+
+_IDLE = const(0)
+_SENDING = const(1)  # a frame or ping is on the air
+_AWAIT_ACK = const(2)
+
+
+class _Inflight:
+    # The one request on the air or waiting for its acknowledgement.
+    # canceled: the request already has its final status (canceled, or
+    # acknowledged before the driver reported the end of transmission); the
+    # slot stays busy until the driver is done with the frame.
+    __slots__ = ("req", "handle", "state", "seq", "dst_id", "ack_deadline", "canceled", "kind")
+
+    def __init__(self):
+        self.clear()
+
+    def clear(self):
+        self.req = None
+        self.handle = None
+        self.state = _IDLE
+        self.seq = 0
+        self.dst_id = None
+        self.ack_deadline = 0
+        self.canceled = False
+        self.kind = 0  # 0 data, 1 advert, 2 link ack, 3 ping
+
+
+class Link:
+    def __init__(
+        self,
+        name,
+        driver,
+        node_id,
+        names,
+        listener=None,
+        queue_capacity=32,
+        advert_period_ms=60000,
+        lost_after=3,
+        ack_timeout_ms=None,
+        max_retries=2,
+        aging_ms=0,
+        addr_map=None,
+        dup_window_ms=60000,
+    ):
+        self.name = name
+        self.driver = driver
+        self.node_id = node_id
+        self.names = names
+        self.listener = listener
+        self.queue = TxQueue(queue_capacity, aging_ms)
+        self.discovery = Discovery(advert_period_ms, lost_after)
+        self.addr_map = addr_map if addr_map is not None else AddressMap(True, driver.broadcast_addr)
+        self.elided = driver.caps.has(CAP_ADDRESSING)
+        self.seq_mod = fr.SEQ_MOD_ELIDED if self.elided else fr.SEQ_MOD_RAW
+        self.max_retries = max_retries
+        self.dup_window_ms = dup_window_ms
+        if ack_timeout_ms is None:
+            # a round trip of two full frames plus the driver's latency, twice
+            ack_timeout_ms = 4 * driver.caps.latency_ms + 2 * (driver.caps.mtu_tx * 8 * 1000) // max(driver.caps.bitrate, 1) + 200
+        self.ack_timeout_ms = ack_timeout_ms
+        self._fl = _Inflight()
+        self._active = {}  # req_id -> TxRequest, accepted and not yet final
+        self._seq = 0
+        self._last_tx = None
+        self._recent = {}  # src id -> list of [seq, time]
+        self._pending_acks = []  # (dst_id, seq) link acks to send first
+        self._txbuf = bytearray(driver.caps.mtu_tx + fr.RAW_OVERHEAD_WIDE)
+        self._caps = None
+        self.stats = {
+            "tx_frames": 0,
+            "rx_frames": 0,
+            "rx_bad": 0,
+            "rx_not_for_us": 0,
+            "rx_duplicates": 0,
+            "adverts_sent": 0,
+            "acks_sent": 0,
+            "retries": 0,
+        }
+
+    # -- capability advertisement ---------------------------------------------
+    @property
+    def caps(self):
+        # What the layers above may rely on: the driver's figures, with the
+        # MTU reduced by acomm's framing, and the link's own services added.
+        c = self.driver.caps.copy()
+        ovh = fr.ELIDED_OVERHEAD if self.elided else fr.RAW_OVERHEAD_WIDE
+        c.mtu_tx = max(c.mtu_tx - ovh, 0)
+        c.mtu_rx = max(c.mtu_rx - ovh, 0)
+        c.flags |= CAP_DISCOVERY | CAP_RELIABLE
+        return c
+
+    def advertise_caps(self):
+        c = self.caps
+        self._caps = c
+        self._emit((EV_CAPS, self, c))
+        return c
+
+    def _check_caps_changed(self):
+        c = self.caps
+        if self._caps is not None and c != self._caps:
+            self._caps = c
+            self._emit((EV_CAPS, self, c))
+
+    # -- helpers ----------------------------------------------------------------
+    def _emit(self, ev):
+        if self.listener is not None:
+            self.listener(ev)
+
+    def _status(self, req_id, status, reason=""):
+        self._emit((EV_STATUS, self, req_id, status, reason))
+
+    def _final(self, req, status, reason=""):
+        # The single exit for accepted requests.
+        if self._active.pop(req.req_id, None) is None:
+            raise AcommError("request %d finished twice" % req.req_id)
+        self._status(req.req_id, status, reason)
+
+    def _refuse(self, req_id, reason):
+        self._status(req_id, FAILED, reason)
+        return False
+
+    def mtu_for(self, dst_id):
+        m = self.driver.caps.mtu_tx
+        if self.elided:
+            return m - fr.ELIDED_OVERHEAD
+        return m - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
+
+    def _resolve(self, dst):
+        # destination name -> node id (None for broadcast); raises on unknown
+        if dst == BROADCAST:
+            return None
+        nid = self.names.id_of(dst)
+        if nid is None:
+            raise AcommError("unknown destination %r" % (dst,))
+        if nid == self.node_id:
+            raise AcommError("destination %r is this node" % (dst,))
+        if self.elided and self.addr_map.addr_of(nid) is None:
+            raise AcommError("no %s address for %r" % (self.name, dst))
+        return nid
+
+    # -- frame transmission request ----------------------------------------------
+    def request(self, now, req_id, dst, data, lifespan_s, priority=10, ack=False):
+        # Returns True when accepted (status `queued` follows), False when
+        # refused (status `failed` with the reason was already emitted).
+        if not 0 <= req_id <= 0xFFFF:
+            return self._refuse(req_id & 0xFFFF, "request id outside 0..65535")
+        if req_id in self._active:
+            return self._refuse(req_id, "request id %d is already in use" % req_id)
+        if not 1 <= priority <= 16:
+            return self._refuse(req_id, "priority %d outside 1..16" % priority)
+        life_ms = int(lifespan_s * 1000)
+        if life_ms <= 0:
+            return self._refuse(req_id, "lifespan must be positive")
+        if life_ms > _MAX_LIFESPAN_MS:
+            return self._refuse(req_id, "lifespan longer than %d s" % (_MAX_LIFESPAN_MS // 1000))
+        try:
+            dst_id = self._resolve(dst)
+        except AcommError as e:
+            return self._refuse(req_id, str(e))
+        mtu = self.mtu_for(dst_id)
+        if len(data) > mtu:
+            return self._refuse(req_id, "%d bytes exceed the %s MTU of %d" % (len(data), self.name, mtu))
+        req = TxRequest(req_id, dst_id, priority, ticks_add(now, life_ms), bytes(data))
+        # retries left; a broadcast cannot be acknowledged
+        req.meta = [self.max_retries if (ack and dst_id is not None) else -1, None]
+        return self._enqueue(req, now)
+
+    def _enqueue(self, req, now):
+        out = self.queue.push(req, now)
+        if out is req:
+            return self._refuse(req.req_id, "transmit queue full of higher-priority requests")
+        self._active[req.req_id] = req
+        self._status(req.req_id, QUEUED)
+        if out is not None:
+            self._final(out, FAILED, "evicted from a full queue by a higher-priority request")
+        return True
+
+    # -- ranging ------------------------------------------------------------------
+    def range(self, now, req_id, names, lifespan_s, priority=2):
+        if not self.driver.caps.has(CAP_RANGING):
+            return self._refuse(req_id, "%s cannot measure range" % self.name)
+        if req_id in self._active:
+            return self._refuse(req_id, "request id %d is already in use" % req_id)
+        life_ms = int(lifespan_s * 1000)
+        if life_ms <= 0 or life_ms > _MAX_LIFESPAN_MS:
+            return self._refuse(req_id, "lifespan must be positive and below %d s" % (_MAX_LIFESPAN_MS // 1000))
+        if not names:
+            return self._refuse(req_id, "no node to range")
+        ids = []
+        for n in names:
+            try:
+                nid = self._resolve(n)
+            except AcommError as e:
+                return self._refuse(req_id, str(e))
+            if nid is None:
+                return self._refuse(req_id, "cannot range the broadcast address")
+            ids.append(nid)
+        req = TxRequest(req_id, None, priority, ticks_add(now, life_ms), b"")
+        # meta: [-2 marks ranging, (ids, results, next index)]
+        req.meta = [-2, (ids, [None] * len(ids), [0])]
+        return self._enqueue(req, now)
+
+    # -- cancellation -------------------------------------------------------------
+    def cancel(self, now, req_id, reason="canceled"):
+        req = self.queue.cancel(req_id)
+        if req is not None:
+            self._final(req, CANCELED, reason)
+            return True
+        fl = self._fl
+        if fl.req is not None and fl.req.req_id == req_id and not fl.canceled:
+            # The bytes may already be on the air; we stop caring about them.
+            fl.canceled = True
+            self._final(fl.req, CANCELED, reason)
+            if fl.state == _AWAIT_ACK:
+                fl.clear()
+            return True
+        return False
+
+    # -- availability -------------------------------------------------------------
+    def availability(self, name):
+        nid = self.names.id_of(name)
+        return self.discovery.state(nid) if nid is not None else 0
+
+    def _heard(self, nid, now, period_ms=None):
+        if nid is None or nid == self.node_id:
+            return
+        if self.discovery.heard(nid, now, period_ms) == AVAILABLE:
+            self._emit((EV_AVAILABILITY, self, self.names.learn(nid), AVAILABLE))
+
+    # -- time ---------------------------------------------------------------------
+    def poll(self, now):
+        d = self.driver
+        d.poll(now)
+        self._handle_driver_events(now)
+        for nid in self.discovery.poll(now):
+            self._emit((EV_AVAILABILITY, self, self.names.name_of(nid), UNAVAILABLE))
+        fl = self._fl
+        if fl.state == _AWAIT_ACK:
+            req = fl.req
+            if ticks_diff(now, req.deadline) >= 0:
+                fl.clear()
+                self._final(req, EXPIRED, "lifespan ended before delivery was confirmed")
+            elif ticks_diff(now, fl.ack_deadline) >= 0:
+                fl.clear()
+                self._retry_or_fail(req, now, "no acknowledgement")
+        for req in self.queue.expire(now):
+            self._final(req, EXPIRED, "lifespan ended in the queue")
+        if fl.state == _IDLE and d.ready(now):
+            self._start_next(now)
+            self._handle_driver_events(now)
+
+    def feed(self, now, data):
+        self.driver.feed(now, data)
+        self._handle_driver_events(now)
+
+    def take_output(self):
+        return self.driver.take_output()
+
+    def _retry_or_fail(self, req, now, reason):
+        if req.meta[0] > 0:
+            req.meta[0] -= 1
+            self.stats["retries"] += 1
+            out = self.queue.push(req, now)
+            if out is req:
+                self._final(req, FAILED, reason + "; queue full for the retry")
+            else:
+                self._status(req.req_id, QUEUED, reason + "; retrying")
+                if out is not None:
+                    self._final(out, FAILED, "evicted from a full queue by a higher-priority request")
+        else:
+            self._final(req, FAILED, reason)
+
+    # -- transmission -------------------------------------------------------------
+    def _next_seq(self):
+        s = self._seq
+        self._seq = (s + 1) % self.seq_mod
+        return s
+
+    def _encode(self, ftype, dst_id, seq, payload, flags=0):
+        if self.elided:
+            n = fr.encode_elided_into(self._txbuf, ftype, seq, payload, 0)
+            addr = self.addr_map.broadcast if dst_id is None else self.addr_map.addr_of(dst_id)
+        else:
+            d = fr.BROADCAST if dst_id is None else dst_id
+            n = fr.encode_raw_into(self._txbuf, ftype, self.node_id, d, seq, payload, flags)
+            addr = None
+        return addr, bytes(memoryview(self._txbuf)[:n])
+
+    def _start_next(self, now):
+        fl = self._fl
+        d = self.driver
+        if self._pending_acks:
+            dst_id, seq = self._pending_acks.pop(0)
+            addr, data = self._encode(fr.ACK, dst_id, seq, b"")
+            fl.kind = 2
+            fl.handle = d.send(now, addr, data, False)
+            fl.state = _SENDING
+            self.stats["acks_sent"] += 1
+            return
+        req = self.queue.pop(now)
+        if req is None:
+            if self.discovery.advert_due(now, self._last_tx):
+                addr, data = self._encode(fr.ADVERT, None, self._next_seq(), encode_advert(self.node_id, self.discovery.period_ms))
+                fl.kind = 1
+                fl.handle = d.send(now, addr, data, False)
+                fl.state = _SENDING
+                self._last_tx = now
+                self.stats["adverts_sent"] += 1
+            return
+        fl.req = req
+        fl.canceled = False
+        if req.meta[0] == -2:
+            self._ping_next(now)
+            return
+        want_ack = req.meta[0] >= 0
+        # a retry keeps its sequence number so the receiver can drop the copy
+        seq = req.meta[1]
+        if seq is None:
+            seq = self._next_seq()
+            req.meta[1] = seq
+        flags = fr.F_ACK_REQ if (want_ack and not self.elided) else 0
+        try:
+            addr, data = self._encode(fr.DATA, req.dst, seq, req.data, flags)
+            fl.handle = d.send(now, addr, data, want_ack and self.elided)
+        except AcommError as e:
+            fl.clear()
+            self._final(req, FAILED, "driver refused the frame: %s" % e)
+            return
+        fl.kind = 0
+        fl.seq = seq
+        fl.dst_id = req.dst
+        fl.state = _SENDING
+        self._last_tx = now
+        self.stats["tx_frames"] += 1
+        self._status(req.req_id, TRANSMITTING)
+
+    def _ping_next(self, now):
+        fl = self._fl
+        req = fl.req
+        ids, _, idx = req.meta[1]
+        nid = ids[idx[0]]
+        fl.kind = 3
+        fl.state = _SENDING
+        if idx[0] == 0:
+            self._status(req.req_id, TRANSMITTING)
+        fl.handle = self.driver.ping(now, self.addr_map.addr_of(nid))
+        self._last_tx = now
+
+    def _range_result(self, now, metres):
+        fl = self._fl
+        req = fl.req
+        ids, results, idx = req.meta[1]
+        results[idx[0]] = metres
+        idx[0] += 1
+        if fl.canceled:
+            fl.clear()
+            return
+        if idx[0] < len(ids) and ticks_diff(now, req.deadline) < 0:
+            fl.state = _IDLE  # the next ping goes when the driver is ready
+            if self.driver.ready(now):
+                self._ping_next(now)
+            return
+        fl.clear()
+        names = [self.names.name_of(i) for i in ids]
+        self._emit((EV_RANGE_RECEIVED, self, req.req_id, names, results))
+        got = 0
+        for r in results:
+            if r is not None:
+                got += 1
+        if got:
+            self._final(req, DELIVERED, "%d of %d ranges" % (got, len(ids)))
+        else:
+            self._final(req, FAILED, "no range reply")
+
+    # -- events from the driver ---------------------------------------------------
+    def _handle_driver_events(self, now):
+        for ev in self.driver.take_events():
+            code = ev[0]
+            if code == EV_RX:
+                self._on_rx(now, ev[1], ev[2], ev[3])
+            elif code == EV_TX_DONE:
+                self._on_tx_done(now, ev[1])
+            elif code == EV_DELIVERED:
+                self._on_delivered(now, ev[1])
+            elif code == EV_TX_FAILED:
+                self._on_tx_failed(now, ev[1], ev[2])
+            elif code == EV_RANGE:
+                if self._fl.kind == 3 and ev[1] == self._fl.handle:
+                    self._range_result(now, ev[3])
+            elif code == EV_DRIVER_UP or code == EV_DRIVER_DOWN:
+                self._check_caps_changed()
+
+    def _on_tx_done(self, now, handle):
+        fl = self._fl
+        if fl.state != _SENDING or handle != fl.handle or fl.kind == 3:
+            return
+        if fl.kind != 0:  # advert or link ack: nothing to report
+            fl.clear()
+            return
+        req = fl.req
+        if fl.canceled:
+            fl.clear()
+            return
+        if req.meta[0] >= 0:
+            fl.state = _AWAIT_ACK
+            fl.ack_deadline = ticks_add(now, self.ack_timeout_ms)
+            self._status(req.req_id, WAITING)
+        else:
+            fl.clear()
+            self._final(req, TRANSMITTED)
+
+    def _on_delivered(self, now, handle):
+        fl = self._fl
+        if fl.kind == 0 and fl.req is not None and handle == fl.handle and not fl.canceled:
+            req = fl.req
+            fl.clear()
+            self._final(req, DELIVERED)
+
+    def _on_tx_failed(self, now, handle, reason):
+        fl = self._fl
+        if fl.state == _IDLE or handle != fl.handle:
+            return
+        if fl.kind == 3:
+            self._range_result(now, None)
+            return
+        req = fl.req
+        kind = fl.kind
+        canceled = fl.canceled
+        fl.clear()
+        if kind == 0 and req is not None and not canceled:
+            self._retry_or_fail(req, now, reason)
+
+    def _is_duplicate(self, src, seq, now):
+        lst = self._recent.get(src)
+        if lst is None:
+            if len(self._recent) >= 255:
+                self._recent.clear()  # bounded; forgetting only risks a duplicate
+            lst = []
+            self._recent[src] = lst
+        for e in lst:
+            if e[0] == seq and ticks_diff(now, e[1]) < self.dup_window_ms:
+                e[1] = now
+                return True
+        if len(lst) >= _DUP_SLOTS:
+            lst.pop(0)
+        lst.append([seq, now])
+        return False
+
+    def _on_rx(self, now, src_addr, dst_addr, data):
+        self.stats["rx_frames"] += 1
+        try:
+            if self.elided:
+                src = self.addr_map.id_of(src_addr)
+                if dst_addr is None or dst_addr == self.addr_map.broadcast:
+                    dst = None
+                else:
+                    dst = self.addr_map.id_of(dst_addr)
+                f = fr.decode_elided(data, src, dst)
+                if src is None:
+                    raise DecodeError("frame from unmapped address %r" % (src_addr,))
+            else:
+                f = fr.decode_raw(data)
+                src = f.src
+                dst = None if f.dst == fr.BROADCAST else f.dst
+        except DecodeError:
+            self.stats["rx_bad"] += 1
+            return
+        if f.ftype == fr.ADVERT:
+            try:
+                nid, period = decode_advert(f.payload)
+            except DecodeError:
+                self.stats["rx_bad"] += 1
+                return
+            if self.elided and src_addr is not None and nid != src:
+                self.addr_map.set(nid, src_addr)
+                src = nid
+            self._heard(src, now, period)
+            return
+        self._heard(src, now)
+        if dst is not None and dst != self.node_id:
+            self.stats["rx_not_for_us"] += 1
+            return
+        if f.ftype == fr.ACK:
+            fl = self._fl
+            if fl.kind == 0 and fl.req is not None and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
+                req = fl.req
+                if fl.state == _AWAIT_ACK:
+                    fl.clear()
+                else:
+                    # the ack beat our own end-of-transmission estimate: the
+                    # request is done; the slot frees at EV_TX_DONE
+                    fl.canceled = True
+                self._final(req, DELIVERED)
+            return
+        if f.ftype != fr.DATA:
+            return
+        if f.flags & fr.F_ACK_REQ and dst is not None and len(self._pending_acks) < _MAX_PENDING_ACKS:
+            # acknowledge duplicates too: our earlier ack may have been lost
+            self._pending_acks.append((src, f.seq))
+        if self._is_duplicate(src, f.seq, now):
+            self.stats["rx_duplicates"] += 1
+            return
+        self._emit(
+            (
+                EV_RECEIVED,
+                self,
+                self.names.name_of(src),
+                BROADCAST if dst is None else self.names.name_of(dst),
+                f.payload,
+            )
+        )

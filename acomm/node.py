@@ -1,0 +1,104 @@
+# The Node: one system on the network. It owns its links and the name table,
+# moves bytes between each link and its byte stream, and passes every link
+# event to one listener. Time is injected: step(now) does one round of work
+# at the given time (the simulator calls it on virtual time); run() loops on
+# asyncio with the node's clock (the ports use it on real time).
+#
+# A stream is any object with read(n) -> bytes or None/b"" when nothing is
+# waiting, and write(bytes): machine.UART, acomm.fakeuart.FakeUART, or the
+# CPython port's serial and socket adapters.
+
+from .compat import const, ticks_ms
+from .events import EV_STATUS, is_final
+from .link import Link
+from .names import NameTable
+
+_READ_CHUNK = const(256)
+_EVENT_BACKLOG = const(64)
+
+
+class Node:
+    def __init__(self, name, node_id, clock=None, names=None, listener=None):
+        self.name = name
+        self.node_id = node_id
+        self.clock = clock if clock is not None else ticks_ms
+        self.names = names if names is not None else NameTable()
+        self.names.add(name, node_id)
+        self.listener = listener
+        self.links = {}
+        self._streams = {}
+        self._req_id = 0
+        # Without a listener, events wait here for the application to take
+        # them; bounded: the oldest are dropped (and counted) beyond the cap.
+        self.backlog = []
+        self.backlog_dropped = 0
+
+    def add_link(self, name, driver, stream=None, **options):
+        link = Link(name, driver, self.node_id, self.names, self._on_event, **options)
+        self.links[name] = link
+        self._streams[name] = stream
+        return link
+
+    def link(self, name):
+        return self.links[name]
+
+    def next_req_id(self):
+        self._req_id = (self._req_id + 1) & 0xFFFF
+        return self._req_id
+
+    def _on_event(self, ev):
+        if self.listener is not None:
+            self.listener(ev)
+            return
+        if len(self.backlog) >= _EVENT_BACKLOG:
+            self.backlog.pop(0)
+            self.backlog_dropped += 1
+        self.backlog.append(ev)
+
+    def take_events(self):
+        ev = self.backlog
+        self.backlog = []
+        return ev
+
+    def send(self, link_name, dst, data, lifespan_s, priority=10, ack=False, now=None):
+        # Convenience: a new request id and a transmission request on one link.
+        # Returns the request id (its statuses follow as events).
+        rid = self.next_req_id()
+        self.links[link_name].request(self.clock() if now is None else now, rid, dst, data, lifespan_s, priority, ack)
+        return rid
+
+    def step(self, now=None):
+        if now is None:
+            now = self.clock()
+        for name in self.links:
+            link = self.links[name]
+            stream = self._streams[name]
+            if stream is not None:
+                data = stream.read(_READ_CHUNK)
+                while data:
+                    link.feed(now, data)
+                    data = stream.read(_READ_CHUNK)
+            link.poll(now)
+            if stream is not None:
+                out = link.take_output()
+                if out:
+                    stream.write(out)
+        return now
+
+    async def run(self, period_ms=10, stop=None):
+        # Runs until stop() returns True (forever when stop is None).
+        import asyncio
+
+        while stop is None or not stop():
+            self.step()
+            await asyncio.sleep(period_ms / 1000)
+
+
+def final_statuses(events):
+    # Helper for applications and tests: {req_id: status} of the final
+    # statuses among events.
+    out = {}
+    for ev in events:
+        if ev[0] == EV_STATUS and is_final(ev[3]):
+            out[ev[2]] = ev[3]
+    return out
