@@ -17,7 +17,6 @@ class BitWriter:
         self._buf = buf
         self._cap = len(buf) * 8
         self._pos = 0
-        self._dirty = len(buf)  # bytes that may hold old data
 
     def reset(self):
         self._pos = 0
@@ -53,18 +52,20 @@ class BitWriter:
         self._pos = pos
 
     def write_signed(self, value, nbits):
+        if nbits == 0 and value == 0:
+            return
         lim = 1 << (nbits - 1) if nbits > 0 else 0
         if value < -lim or value >= lim:
             raise EncodeError("value %d does not fit in %d signed bits" % (value, nbits))
         self.write(value & ((1 << nbits) - 1), nbits)
 
     def write_bytes(self, data):
-        # Whole bytes at the current (possibly unaligned) position.
+        # Whole bytes at the current (possibly unaligned) position; all or nothing.
+        n = len(data)
+        if self._pos + n * 8 > self._cap:
+            raise EncodeError("buffer full: %d bits free, %d needed" % (self._cap - self._pos, n * 8))
         if self._pos & 7 == 0:
             i = self._pos >> 3
-            n = len(data)
-            if self._pos + n * 8 > self._cap:
-                raise EncodeError("buffer full: %d bits free, %d needed" % (self._cap - self._pos, n * 8))
             self._buf[i : i + n] = data
             self._pos += n * 8
         else:
@@ -122,9 +123,11 @@ class BitReader:
 
     def read_bytes(self, n):
         # Returns a memoryview slice when aligned (no copy), else a new bytes.
+        if n < 0:
+            raise DecodeError("bad byte count %d" % n)
+        if self._pos + n * 8 > self._end:
+            raise DecodeError("read past end: %d bytes wanted, %d bits left" % (n, self._end - self._pos))
         if self._pos & 7 == 0:
-            if self._pos + n * 8 > self._end:
-                raise DecodeError("read past end: %d bytes wanted, %d bits left" % (n, self._end - self._pos))
             i = self._pos >> 3
             self._pos += n * 8
             return self._mv[i : i + n]

@@ -77,21 +77,24 @@ class FakeUART:
         self._deliver()
 
     def inject(self, data):
-        # Bytes appear on this end's receive side at once, as line noise would.
-        self._pending.append((self.clock(), bytes(data)))
+        # Bytes appear on this end's receive side at once, as line noise
+        # would, even ahead of delayed data still on its way.
         self._deliver()
+        self._put(bytes(data))
+
+    def _put(self, data):
+        room = self._rxcap - len(self._rx)
+        if len(data) > room:
+            self.overruns += len(data) - room
+            data = data[:room]
+        self._rx.extend(data)
 
     def _deliver(self):
         now = self.clock()
         p = self._pending
         # in order: a later chunk never overtakes an earlier one on a wire
         while p and ticks_diff(p[0][0], now) <= 0:
-            data = p.pop(0)[1]
-            room = self._rxcap - len(self._rx)
-            if len(data) > room:
-                self.overruns += len(data) - room
-                data = data[:room]
-            self._rx.extend(data)
+            self._put(p.pop(0)[1])
 
     def any(self):
         self._deliver()
