@@ -17,6 +17,7 @@ import acomm
 BENCHES = {
     "core": "core_workload",
     "queue": "queue_workload",
+    "discovery": "discovery_workload",
 }
 
 
