@@ -129,6 +129,8 @@ class Link:
             "adverts_sent": 0,
             "acks_sent": 0,
             "retries": 0,
+            "rx_own": 0,
+            "tx_refused": 0,
         }
 
     # -- capability advertisement ---------------------------------------------
@@ -340,26 +342,38 @@ class Link:
             addr = None
         return addr, bytes(memoryview(self._txbuf)[:n])
 
+    def _send_control(self, now, kind, ftype, dst_id, seq, payload):
+        # Adverts and link acks: no request behind them, so a driver refusal
+        # is only counted.
+        fl = self._fl
+        try:
+            addr, data = self._encode(ftype, dst_id, seq, payload)
+            fl.handle = self.driver.send(now, addr, data, False)
+        except AcommError:
+            fl.clear()
+            self.stats["tx_refused"] += 1
+            return False
+        fl.kind = kind
+        fl.state = _SENDING
+        return True
+
     def _start_next(self, now):
         fl = self._fl
         d = self.driver
         if self._pending_acks:
             dst_id, seq = self._pending_acks.pop(0)
-            addr, data = self._encode(fr.ACK, dst_id, seq, b"")
-            fl.kind = 2
-            fl.handle = d.send(now, addr, data, False)
-            fl.state = _SENDING
-            self.stats["acks_sent"] += 1
+            if self._send_control(now, 2, fr.ACK, dst_id, seq, b""):
+                self.stats["acks_sent"] += 1
             return
         req = self.queue.pop(now)
         if req is None:
             if self.discovery.advert_due(now, self._last_tx):
-                addr, data = self._encode(fr.ADVERT, None, self._next_seq(), encode_advert(self.node_id, self.discovery.period_ms))
-                fl.kind = 1
-                fl.handle = d.send(now, addr, data, False)
-                fl.state = _SENDING
+                # counted as sent even when refused, so a stuck driver is not
+                # asked again on every poll
                 self._last_tx = now
-                self.stats["adverts_sent"] += 1
+                advert = encode_advert(self.node_id, self.discovery.period_ms)
+                if self._send_control(now, 1, fr.ADVERT, None, self._next_seq(), advert):
+                    self.stats["adverts_sent"] += 1
             return
         fl.req = req
         fl.canceled = False
@@ -518,6 +532,11 @@ class Link:
                 dst = None if f.dst == fr.BROADCAST else f.dst
         except DecodeError:
             self.stats["rx_bad"] += 1
+            return
+        if src == self.node_id:
+            # our own frame echoed back, or another node configured with our
+            # id: never hand it up as received
+            self.stats["rx_own"] += 1
             return
         if f.ftype == fr.ADVERT:
             try:

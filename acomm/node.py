@@ -27,6 +27,7 @@ class Node:
         self.listener = listener
         self.links = {}
         self._streams = {}
+        self._unsent = {}  # link name -> bytes a short write left behind
         self._req_id = 0
         # Without a listener, events wait here for the application to take
         # them; bounded: the oldest are dropped (and counted) beyond the cap.
@@ -37,6 +38,7 @@ class Node:
         link = Link(name, driver, self.node_id, self.names, self._on_event, **options)
         self.links[name] = link
         self._streams[name] = stream
+        self._unsent[name] = b""
         return link
 
     def link(self, name):
@@ -80,10 +82,22 @@ class Node:
                     data = stream.read(_READ_CHUNK)
             link.poll(now)
             if stream is not None:
-                out = link.take_output()
-                if out:
-                    stream.write(out)
+                self._write(name, link, stream)
         return now
+
+    def _write(self, name, link, stream):
+        # machine.UART.write may take only part of the bytes (or return None
+        # on timeout): keep the rest and send it first next time, before
+        # taking more output from the link.
+        out = self._unsent[name]
+        if not out:
+            out = link.take_output()
+            if not out:
+                return
+        n = stream.write(out)
+        if n is None:
+            n = 0
+        self._unsent[name] = out[n:] if n < len(out) else b""
 
     async def run(self, period_ms=10, stop=None):
         # Runs until stop() returns True (forever when stop is None).

@@ -170,3 +170,53 @@ def test_raw_frames_on_the_line_are_compact():
     d = [f for f in data if f.ftype == fr.DATA][0]
     raw = [f for f in frames if fr.decode_raw(f).ftype == fr.DATA][0]
     assert len(raw) == 10 + fr.RAW_OVERHEAD_SHORT and d.src == 1 and d.dst == 2
+
+
+class ShortWriter:
+    # A UART whose write() takes at most 3 bytes at a time, or None (timeout)
+    # every third call, as machine.UART may.
+    def __init__(self, uart):
+        self.uart = uart
+        self.calls = 0
+
+    def read(self, n=-1):
+        return self.uart.read(n)
+
+    def write(self, data):
+        self.calls += 1
+        if self.calls % 3 == 0:
+            return None
+        return self.uart.write(bytes(data[:3]))
+
+
+def test_short_writes_lose_nothing():
+    clk = ManualClock()
+    a, b = uart_pair(clock=clk)
+    buoy, diver = make_nodes((ShortWriter(a), b), clk, advert_period_ms=600000)
+    rid = buoy.send("radio", "diver", b"a longer message than three bytes", 30, ack=True)
+    run((buoy, diver), clk, 3000)
+    assert buoy.listener.final(rid) == DELIVERED
+    assert [bytes(e[4]) for e in diver.listener.of(EV_RECEIVED)] == [b"a longer message than three bytes"]
+
+
+def test_own_frames_heard_back_are_not_received():
+    clk = ManualClock()
+    a, b = uart_pair(clock=clk)
+    buoy, diver = make_nodes((a, b), clk)
+    b.peers.append(b)  # the diver's radio hears itself
+    diver.send("radio", BROADCAST, b"echo", 30)
+    run((buoy, diver), clk, 1000)
+    assert diver.listener.of(EV_RECEIVED) == []
+    assert diver.links["radio"].stats["rx_own"] >= 1
+    assert [bytes(e[4]) for e in buoy.listener.of(EV_RECEIVED)] == [b"echo"]
+
+
+def test_a_link_without_a_stream_keeps_running():
+    # nobody drains the driver's output: the driver refuses, the link counts
+    clk = ManualClock()
+    n = Node("lonely", 7, clk, listener=Recorder())
+    n.add_link("radio", TransparentDriver(9600), None, advert_period_ms=100)
+    for _ in range(3000):
+        n.step()
+        clk.advance(10)
+    assert n.links["radio"].stats["tx_refused"] > 0
