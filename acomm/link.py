@@ -19,6 +19,8 @@
 from . import frame as fr
 from .caps import CAP_ADDRESSING, CAP_DISCOVERY, CAP_RANGING, CAP_RELIABLE
 from .compat import const, ticks_add, ticks_diff
+from .acktable import AckTable
+from .dedup import DuplicateFilter
 from .discovery import Discovery, decode_advert, encode_advert
 from .errors import AcommError, DecodeError
 from .events import (
@@ -50,20 +52,18 @@ from .txqueue import TxQueue, TxRequest
 
 BROADCAST = "*"  # destination name meaning every node on the link
 _MAX_LIFESPAN_MS = const(1 << 28)  # 3.1 days: the queue's wrap-safe horizon
-_DUP_SLOTS = const(8)  # recent sequence numbers remembered per source
 _MAX_PENDING_ACKS = const(4)
 
 _IDLE = const(0)
 _SENDING = const(1)  # a frame or ping is on the air
-_AWAIT_ACK = const(2)
 
 
 class _Inflight:
-    # The one request on the air or waiting for its acknowledgement.
+    # The one frame (or ping) on the air.
     # canceled: the request already has its final status (canceled, or
     # acknowledged before the driver reported the end of transmission); the
     # slot stays busy until the driver is done with the frame.
-    __slots__ = ("req", "handle", "state", "seq", "dst_id", "ack_deadline", "canceled", "kind")
+    __slots__ = ("req", "handle", "state", "seq", "dst_id", "canceled", "kind")
 
     def __init__(self):
         self.clear()
@@ -74,7 +74,6 @@ class _Inflight:
         self.state = _IDLE
         self.seq = 0
         self.dst_id = None
-        self.ack_deadline = 0
         self.canceled = False
         self.kind = 0  # 0 data, 1 advert, 2 link ack, 3 ping
 
@@ -95,6 +94,7 @@ class Link:
         aging_ms=0,
         addr_map=None,
         dup_window_ms=60000,
+        ack_window=4,
     ):
         self.name = name
         self.driver = driver
@@ -109,14 +109,15 @@ class Link:
         self.max_retries = max_retries
         self.dup_window_ms = dup_window_ms
         if ack_timeout_ms is None:
-            # a round trip of two full frames plus the driver's latency, twice
-            ack_timeout_ms = 4 * driver.caps.latency_ms + 2 * (driver.caps.mtu_tx * 8 * 1000) // max(driver.caps.bitrate, 1) + 200
+            # the frame's way there and the ack's way back, with a margin
+            ack_timeout_ms = 2 * driver.caps.latency_ms + 1000
         self.ack_timeout_ms = ack_timeout_ms
         self._fl = _Inflight()
+        self._acks = AckTable(ack_window)
+        self._dups = DuplicateFilter(dup_window_ms)
         self._active = {}  # req_id -> TxRequest, accepted and not yet final
         self._seq = 0
         self._last_tx = None
-        self._recent = {}  # src id -> list of [seq, time]
         self._pending_acks = []  # (dst_id, seq) link acks to send first
         self._txbuf = bytearray(driver.caps.mtu_tx + fr.RAW_OVERHEAD_WIDE)
         self._caps = None
@@ -267,8 +268,10 @@ class Link:
             # The bytes may already be on the air; we stop caring about them.
             fl.canceled = True
             self._final(fl.req, CANCELED, reason)
-            if fl.state == _AWAIT_ACK:
-                fl.clear()
+            return True
+        req = self._acks.by_req_id(req_id)
+        if req is not None:
+            self._final(req, CANCELED, reason)  # a late ack will match nothing
             return True
         return False
 
@@ -291,13 +294,10 @@ class Link:
         for nid in self.discovery.poll(now):
             self._emit((EV_AVAILABILITY, self, self.names.name_of(nid), UNAVAILABLE))
         fl = self._fl
-        if fl.state == _AWAIT_ACK:
-            req = fl.req
-            if ticks_diff(now, req.deadline) >= 0:
-                fl.clear()
+        for req, expired in self._acks.due(now):
+            if expired:
                 self._final(req, EXPIRED, "lifespan ended before delivery was confirmed")
-            elif ticks_diff(now, fl.ack_deadline) >= 0:
-                fl.clear()
+            else:
                 self._retry_or_fail(req, now, "no acknowledgement")
         for req in self.queue.expire(now):
             self._final(req, EXPIRED, "lifespan ended in the queue")
@@ -365,6 +365,10 @@ class Link:
             if self._send_control(now, 2, fr.ACK, dst_id, seq, b""):
                 self.stats["acks_sent"] += 1
             return
+        if self._acks.full():
+            nxt = self.queue.peek(now)
+            if nxt is not None and nxt.meta[0] >= 0:
+                return  # wait for an ack slot (and a free sequence number)
         req = self.queue.pop(now)
         if req is None:
             if self.discovery.advert_due(now, self._last_tx):
@@ -385,6 +389,9 @@ class Link:
         seq = req.meta[1]
         if seq is None:
             seq = self._next_seq()
+            if want_ack:
+                while self._acks.seq_in_use(req.dst, seq):
+                    seq = self._next_seq()
             req.meta[1] = seq
         flags = fr.F_ACK_REQ if (want_ack and not self.elided) else 0
         try:
@@ -469,24 +476,32 @@ class Link:
         if fl.canceled:
             fl.clear()
             return
+        fl.clear()
         if req.meta[0] >= 0:
-            fl.state = _AWAIT_ACK
-            fl.ack_deadline = ticks_add(now, self.ack_timeout_ms)
+            # the channel is free again: wait for the ack off the air
+            self._acks.add(req, handle, req.dst, req.meta[1], ticks_add(now, self.ack_timeout_ms))
             self._status(req.req_id, WAITING)
         else:
-            fl.clear()
             self._final(req, TRANSMITTED)
 
     def _on_delivered(self, now, handle):
         fl = self._fl
-        if fl.kind == 0 and fl.req is not None and handle == fl.handle and not fl.canceled:
-            req = fl.req
-            fl.clear()
+        if fl.state == _SENDING and fl.kind == 0 and handle == fl.handle:
+            if not fl.canceled:
+                # confirmed before the end of transmission was reported
+                fl.canceled = True
+                self._final(fl.req, DELIVERED)
+            return
+        req = self._acks.by_handle(handle)
+        if req is not None:
             self._final(req, DELIVERED)
 
     def _on_tx_failed(self, now, handle, reason):
         fl = self._fl
         if fl.state == _IDLE or handle != fl.handle:
+            req = self._acks.by_handle(handle)
+            if req is not None:
+                self._retry_or_fail(req, now, reason)
             return
         if fl.kind == 3:
             self._range_result(now, None)
@@ -497,22 +512,6 @@ class Link:
         fl.clear()
         if kind == 0 and req is not None and not canceled:
             self._retry_or_fail(req, now, reason)
-
-    def _is_duplicate(self, src, seq, now):
-        lst = self._recent.get(src)
-        if lst is None:
-            if len(self._recent) >= 255:
-                self._recent.clear()  # bounded; forgetting only risks a duplicate
-            lst = []
-            self._recent[src] = lst
-        for e in lst:
-            if e[0] == seq and ticks_diff(now, e[1]) < self.dup_window_ms:
-                e[1] = now
-                return True
-        if len(lst) >= _DUP_SLOTS:
-            lst.pop(0)
-        lst.append([seq, now])
-        return False
 
     def _on_rx(self, now, src_addr, dst_addr, data):
         self.stats["rx_frames"] += 1
@@ -555,14 +554,14 @@ class Link:
             return
         if f.ftype == fr.ACK:
             fl = self._fl
-            if fl.kind == 0 and fl.req is not None and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
-                req = fl.req
-                if fl.state == _AWAIT_ACK:
-                    fl.clear()
-                else:
-                    # the ack beat our own end-of-transmission estimate: the
-                    # request is done; the slot frees at EV_TX_DONE
-                    fl.canceled = True
+            if fl.state == _SENDING and fl.kind == 0 and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
+                # the ack beat our own end-of-transmission estimate: the
+                # request is done; the slot frees at EV_TX_DONE
+                fl.canceled = True
+                self._final(fl.req, DELIVERED)
+                return
+            req = self._acks.by_ack(src, f.seq)
+            if req is not None:
                 self._final(req, DELIVERED)
             return
         if f.ftype != fr.DATA:
@@ -570,7 +569,7 @@ class Link:
         if f.flags & fr.F_ACK_REQ and dst is not None and len(self._pending_acks) < _MAX_PENDING_ACKS:
             # acknowledge duplicates too: our earlier ack may have been lost
             self._pending_acks.append((src, f.seq))
-        if self._is_duplicate(src, f.seq, now):
+        if self._dups.seen(src, f.seq, now):
             self.stats["rx_duplicates"] += 1
             return
         self._emit(

@@ -346,3 +346,35 @@ def test_idle_node_advertises_and_adverts_teach_addresses():
     clk.advance(1)
     link.poll(clk())
     assert link.discovery.state(9) == UNAVAILABLE
+
+
+def test_channel_is_free_while_waiting_for_acks():
+    # an acknowledged request waits off the air: an alarm goes meanwhile
+    clk, drv, rec, link = make(flags=MODEM_FLAGS, ack_window=2, ack_timeout_ms=5000)
+    now = clk()
+    link.request(now, 1, "diver", b"t1", 60, priority=2, ack=True)
+    link.request(now, 2, "diver", b"t2", 60, priority=2, ack=True)
+    link.request(now, 3, "diver", b"t3", 60, priority=2, ack=True)
+    for _ in range(2):
+        link.poll(now)
+        drv.finish()
+        link.poll(now)
+    assert rec.statuses(1)[-1] == WAITING and rec.statuses(2)[-1] == WAITING
+    # the ack window is full: request 3 waits, but an unacknowledged alarm goes
+    link.poll(now)
+    assert len(drv.sent) == 2
+    link.request(now, 4, "auv", b"ALARM", 60, priority=1)
+    link.poll(now)
+    assert drv.sent[-1][2][1:] == b"ALARM"
+    drv.finish()
+    link.poll(now)
+    assert rec.final(4) == TRANSMITTED
+    # acks arrive out of order; each frees a slot
+    drv.deliver(drv.sent[1][0])
+    link.poll(now)
+    assert rec.final(2) == DELIVERED
+    assert drv.sent[-1][2][1:] == b"t3"
+    drv.deliver(drv.sent[0][0])
+    link.poll(now)
+    assert rec.final(1) == DELIVERED
+    check_exactly_one_final(rec, [1, 2, 4])

@@ -84,12 +84,13 @@ def bench_queue_ops(n_ops=20000, depth=1000):
     return n_ops * 1e6 / dt
 
 
-def bench_alarm_latency(n_alarms=100, flood=10000):
-    # Returns the worst number of frames on the air before an alarm left the
-    # queue, the frame on the air when it arrived included.
+def bench_alarm_latency(n_alarms=100, flood=10000, aging_ms=0, prio=PRIO_ALARM):
+    # Returns the worst number of frames on the air before an alarm (a request
+    # of class `prio`) left the queue, the frame on the air when it arrived
+    # included. aging_ms > 0 turns on the queue's fairness aging.
     rng = Prng(11)
     clk = ManualClock(TICKS_MAX - 100000)
-    q = TxQueue(flood)
+    q = TxQueue(flood, aging_ms)
     rid = 0
     now = clk()
     for _ in range(flood):
@@ -108,7 +109,7 @@ def bench_alarm_latency(n_alarms=100, flood=10000):
             at = rng.below(airtime)
             clk.advance(at)
             now = clk()
-            alarm = TxRequest(0xFFFF, 0, PRIO_ALARM, ticks_add(now, 30000), b"SOS")
+            alarm = TxRequest(0xFFFF, 0, prio, ticks_add(now, 30000), b"SOS")
             out = q.push(alarm, now)
             if out is alarm:
                 raise AssertionError("alarm refused")
@@ -154,6 +155,14 @@ def run(emit):
     emit("queue_ops_per_s", int(ops), "ops/s")
     gc.collect()
     emit("alarm_latency_frames_under_flood", bench_alarm_latency(), "frames")
+    gc.collect()
+    # fairness aging (one class per second waited) and what it costs: alarms
+    # keep their place; class-2 telemetry now competes with aged flood classes
+    emit("alarm_latency_frames_under_flood_aging", bench_alarm_latency(aging_ms=1000), "frames")
+    gc.collect()
+    emit("telemetry_latency_frames_under_flood", bench_alarm_latency(prio=2), "frames")
+    gc.collect()
+    emit("telemetry_latency_frames_under_flood_aging", bench_alarm_latency(aging_ms=1000, prio=2), "frames")
     gc.collect()
 
 
