@@ -4,15 +4,7 @@
 from acomm.bits import BitReader, BitWriter
 from acomm.errors import DecodeError, EncodeError
 from acomm.prng import Prng
-
-
-def _raises(exc, fn, *args):
-    try:
-        fn(*args)
-    except Exception as e:  # noqa: BLE001
-        assert isinstance(e, exc), repr(e)
-        return e
-    assert False, "no %s from %r" % (exc.__name__, args)
+from checks import raises as _raises
 
 
 def _random_fields(rng, count):

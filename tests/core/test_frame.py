@@ -7,6 +7,7 @@ from acomm import frame as F
 from acomm.crc import crc16
 from acomm.errors import CRCError, DecodeError, EncodeError
 from acomm.prng import Prng
+from checks import raises as _raises
 
 
 def _hex(b):
@@ -40,15 +41,6 @@ def _decode_error_only(fn, *args):
     except Exception as e:  # noqa: BLE001 - the point is to catch everything
         assert isinstance(e, DecodeError), repr(e)
         return None
-
-
-def _raises(exc, fn, *args):
-    try:
-        fn(*args)
-    except Exception as e:  # noqa: BLE001
-        assert isinstance(e, exc), repr(e)
-        return e
-    assert False, "no %s from %r" % (exc.__name__, args)
 
 
 # -- the documented examples ------------------------------------------------

@@ -3,18 +3,10 @@
 # MicroPython and CPython, and across versions of acomm.
 
 from acomm.prng import Prng
+from checks import raises as _raises
 
 # xorshift32 (13, 17, 5) from state 1
 SEED1_FIRST = (270369, 67634689, 2647435461, 307599695, 2398689233)
-
-
-def _raises(exc, fn, *args):
-    try:
-        fn(*args)
-    except Exception as e:  # noqa: BLE001
-        assert isinstance(e, exc), repr(e)
-        return e
-    assert False, "no %s from %r" % (exc.__name__, args)
 
 
 def test_fixed_first_outputs_for_seed_1():
