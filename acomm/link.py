@@ -21,6 +21,7 @@ from .caps import CAP_ADDRESSING, CAP_DISCOVERY, CAP_RANGING, CAP_RELIABLE
 from .compat import const, ticks_add, ticks_diff
 from .acktable import AckTable
 from .dedup import DuplicateFilter
+from .linkframing import LinkFraming
 from .discovery import Discovery, decode_advert, encode_advert
 from .errors import AcommError, DecodeError
 from .events import (
@@ -105,7 +106,8 @@ class Link:
         self.discovery = Discovery(advert_period_ms, lost_after)
         self.addr_map = addr_map if addr_map is not None else AddressMap(True, driver.broadcast_addr)
         self.elided = driver.caps.has(CAP_ADDRESSING)
-        self.seq_mod = fr.SEQ_MOD_ELIDED if self.elided else fr.SEQ_MOD_RAW
+        self.framing = LinkFraming(node_id, self.elided, self.addr_map, driver.caps.mtu_tx)
+        self.seq_mod = self.framing.seq_mod
         self.max_retries = max_retries
         self.dup_window_ms = dup_window_ms
         if ack_timeout_ms is None:
@@ -119,7 +121,6 @@ class Link:
         self._seq = 0
         self._last_tx = None
         self._pending_acks = []  # (dst_id, seq) link acks to send first
-        self._txbuf = bytearray(driver.caps.mtu_tx + fr.RAW_OVERHEAD_WIDE)
         self._caps = None
         self.stats = {
             "tx_frames": 0,
@@ -140,7 +141,7 @@ class Link:
         # What the layers above may rely on: the driver's figures, with the
         # MTU reduced by acomm's framing, and the link's own services added.
         c = self.driver.caps.copy()
-        ovh = fr.ELIDED_OVERHEAD if self.elided else fr.RAW_OVERHEAD_WIDE
+        ovh = self.framing.worst_overhead
         c.mtu_tx = max(c.mtu_tx - ovh, 0)
         c.mtu_rx = max(c.mtu_rx - ovh, 0)
         c.flags |= CAP_DISCOVERY | CAP_RELIABLE
@@ -177,10 +178,7 @@ class Link:
         return False
 
     def mtu_for(self, dst_id):
-        m = self.driver.caps.mtu_tx
-        if self.elided:
-            return m - fr.ELIDED_OVERHEAD
-        return m - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
+        return self.framing.mtu_for(dst_id)
 
     def _resolve(self, dst):
         # destination name -> node id (None for broadcast); raises on unknown
@@ -332,22 +330,12 @@ class Link:
         self._seq = (s + 1) % self.seq_mod
         return s
 
-    def _encode(self, ftype, dst_id, seq, payload, flags=0):
-        if self.elided:
-            n = fr.encode_elided_into(self._txbuf, ftype, seq, payload, 0)
-            addr = self.addr_map.broadcast if dst_id is None else self.addr_map.addr_of(dst_id)
-        else:
-            d = fr.BROADCAST if dst_id is None else dst_id
-            n = fr.encode_raw_into(self._txbuf, ftype, self.node_id, d, seq, payload, flags)
-            addr = None
-        return addr, bytes(memoryview(self._txbuf)[:n])
-
     def _send_control(self, now, kind, ftype, dst_id, seq, payload):
         # Adverts and link acks: no request behind them, so a driver refusal
         # is only counted.
         fl = self._fl
         try:
-            addr, data = self._encode(ftype, dst_id, seq, payload)
+            addr, data = self.framing.encode(ftype, dst_id, seq, payload)
             fl.handle = self.driver.send(now, addr, data, False)
         except AcommError:
             fl.clear()
@@ -395,7 +383,7 @@ class Link:
             req.meta[1] = seq
         flags = fr.F_ACK_REQ if (want_ack and not self.elided) else 0
         try:
-            addr, data = self._encode(fr.DATA, req.dst, seq, req.data, flags)
+            addr, data = self.framing.encode(fr.DATA, req.dst, seq, req.data, flags)
             fl.handle = d.send(now, addr, data, want_ack and self.elided)
         except AcommError as e:
             fl.clear()
@@ -516,19 +504,7 @@ class Link:
     def _on_rx(self, now, src_addr, dst_addr, data):
         self.stats["rx_frames"] += 1
         try:
-            if self.elided:
-                src = self.addr_map.id_of(src_addr)
-                if dst_addr is None or dst_addr == self.addr_map.broadcast:
-                    dst = None
-                else:
-                    dst = self.addr_map.id_of(dst_addr)
-                f = fr.decode_elided(data, src, dst)
-                if src is None:
-                    raise DecodeError("frame from unmapped address %r" % (src_addr,))
-            else:
-                f = fr.decode_raw(data)
-                src = f.src
-                dst = None if f.dst == fr.BROADCAST else f.dst
+            f, src, dst = self.framing.decode(src_addr, dst_addr, data)
         except DecodeError:
             self.stats["rx_bad"] += 1
             return

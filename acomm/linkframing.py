@@ -1,0 +1,56 @@
+# How a link puts acomm frames on its interface, and takes them off.
+#
+# raw     the interface has no addressing or integrity (serial radio, UDP):
+#         the acomm raw header carries node ids and the frame ends with a CRC.
+# elided  the modem addresses and checks frames itself (Seatrac, EvoLogics,
+#         Micro-Modem): one header byte, and node ids are translated to and
+#         from modem addresses through the link's AddressMap.
+#
+# The link above deals only in node ids (None meaning broadcast).
+
+from . import frame as fr
+from .errors import DecodeError
+
+
+class LinkFraming:
+    def __init__(self, node_id, elided, addr_map, mtu):
+        self.node_id = node_id
+        self.elided = elided
+        self.addr_map = addr_map
+        self.seq_mod = fr.SEQ_MOD_ELIDED if elided else fr.SEQ_MOD_RAW
+        self.worst_overhead = fr.ELIDED_OVERHEAD if elided else fr.RAW_OVERHEAD_WIDE
+        self._mtu = mtu
+        self._buf = bytearray(mtu + fr.RAW_OVERHEAD_WIDE)
+
+    def mtu_for(self, dst_id):
+        # payload bytes one frame to dst_id can carry
+        if self.elided:
+            return self._mtu - fr.ELIDED_OVERHEAD
+        return self._mtu - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
+
+    def encode(self, ftype, dst_id, seq, payload, flags=0):
+        # -> (interface address or None, frame bytes). The flags travel only
+        # in raw frames; an elided link asks the modem for what they mean.
+        buf = self._buf
+        if self.elided:
+            n = fr.encode_elided_into(buf, ftype, seq, payload, 0)
+            addr = self.addr_map.broadcast if dst_id is None else self.addr_map.addr_of(dst_id)
+        else:
+            d = fr.BROADCAST if dst_id is None else dst_id
+            n = fr.encode_raw_into(buf, ftype, self.node_id, d, seq, payload, flags)
+            addr = None
+        return addr, bytes(memoryview(buf)[:n])
+
+    def decode(self, src_addr, dst_addr, data):
+        # -> (Frame, source node id, destination node id or None for
+        # broadcast). Raises DecodeError.
+        if not self.elided:
+            f = fr.decode_raw(data)
+            return f, f.src, (None if f.dst == fr.BROADCAST else f.dst)
+        am = self.addr_map
+        src = am.id_of(src_addr)
+        dst = None if (dst_addr is None or dst_addr == am.broadcast) else am.id_of(dst_addr)
+        f = fr.decode_elided(data, src, dst)
+        if src is None:
+            raise DecodeError("frame from unmapped address %r" % (src_addr,))
+        return f, src, dst
