@@ -48,8 +48,10 @@ def main(argv):
         i += 1
     if not dirs:
         dirs = [root + "/tests/core"]
-    if root not in sys.path:
-        sys.path.insert(0, root)
+    # the core, and the simulator's portable emulators (driver tests use them)
+    for p in (root + "/ports/sim", root):
+        if p not in sys.path:
+            sys.path.insert(0, p)
     passed = failed = 0
     failures = []
     impl = sys.implementation.name
