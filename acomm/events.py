@@ -43,7 +43,10 @@ AVAIL_NAMES = {UNKNOWN: "unknown", AVAILABLE: "available", UNAVAILABLE: "unavail
 #   (EV_TX_DONE, handle)                   the frame has left the modem
 #   (EV_DELIVERED, handle)                 the modem's own ack arrived
 #   (EV_TX_FAILED, handle, reason)
-#   (EV_RANGE, handle, addr, metres)       addr None when the ping failed
+#   (EV_RANGE, handle, addr, metres[, extra])   addr None when the ping failed;
+#                                          extra, when present, a dict of what
+#                                          else the fix says (bearing,
+#                                          elevation, position, signal level)
 #   (EV_DRIVER_UP,) / (EV_DRIVER_DOWN, reason)   modem (re)configured / lost
 EV_RX = const(1)
 EV_TX_DONE = const(2)

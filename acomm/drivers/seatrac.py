@@ -1,0 +1,401 @@
+# Driver for Blueprint Subsea SeaTrac X110/X150 beacons (acoustic modem and
+# USBL), over their serial command interface. Sans-IO: bytes and time in,
+# bytes and events out (interface in acomm.drivers). docs/drivers.md says
+# what goes on the wire and how the beacon's answers map to acomm statuses.
+#
+# Two things can be outstanding at once, and they are tracked apart:
+#   the command slot   one serial command awaiting its same-CID response
+#                      (answered at once by a live beacon, or timed out);
+#   the acoustic slot  one DAT_SEND or PING_SEND, from the moment the link
+#                      hands it over until its ack, error or timeout.
+# The link sees ready() only through the acoustic slot; housekeeping
+# (keepalive, reboot probes) queues behind or ahead of it on the command
+# slot without ever blocking the link.
+
+from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from ..compat import const, ticks_add, ticks_diff
+from ..errors import AcommError, EncodeError
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
+from . import seatrac_wire as w
+from .seatrac_config import SeatracConfig
+from .seatrac_slot import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot
+
+_S_START = const(0)
+_S_CONFIG = const(1)  # (re)configuring; also "down" while the beacon is silent
+_S_UP = const(2)
+
+# answers to commands (ours, late, or someone else's on the line)
+_COMMANDS = (
+    w.CID_SYS_REBOOT,
+    w.CID_SETTINGS_GET,
+    w.CID_SETTINGS_SET,
+    w.CID_SETTINGS_SAVE,
+    w.CID_DAT_SEND,
+    w.CID_PING_SEND,
+)
+
+
+class SeatracDriver:
+    def __init__(
+        self,
+        beacon_id=None,
+        mtu=30,
+        ack_type=w.MSG_REQU,
+        oway_type=w.MSG_OWAY,
+        ping_type=w.MSG_REQU,
+        set_beacon_id=True,
+        settings_len=110,
+        id_offset=96,
+        packet_ms=500,
+        byte_ms=80,
+        turnaround_ms=300,
+        range_tmo_m=1000,
+        vos=1500,
+        resp_time_ms=10,
+        cmd_timeout_ms=1500,
+        margin_ms=2000,
+        busy_backoff_ms=1000,
+        alive_period_ms=60000,
+        probe_gap_ms=500,
+        retry_ms=2000,
+        reboot_wait_ms=2000,
+        down_after=3,
+    ):
+        if not 1 <= mtu <= 31:
+            raise AcommError("SeaTrac DAT payloads are 1..31 bytes, not %d" % mtu)
+        if beacon_id is not None and not 1 <= beacon_id <= 15:
+            raise AcommError("SeaTrac beacon ids are 1..15, not %r" % (beacon_id,))
+        self.mtu = mtu
+        self.ack_type = ack_type
+        self.oway_type = oway_type
+        self.ping_type = ping_type
+        self.packet_ms = packet_ms
+        self.byte_ms = byte_ms
+        self.turnaround_ms = turnaround_ms
+        self.range_tmo_m = range_tmo_m
+        self.vos = vos
+        self.resp_time_ms = resp_time_ms
+        self.cmd_timeout_ms = cmd_timeout_ms
+        self.margin_ms = margin_ms
+        self.busy_backoff_ms = busy_backoff_ms
+        self.alive_period_ms = alive_period_ms
+        self.probe_gap_ms = probe_gap_ms
+        self.down_after = down_after
+        self.caps = Capabilities(
+            manufacturer="Blueprint Subsea",
+            model="SeaTrac",
+            mtu_tx=mtu,
+            mtu_rx=mtu,
+            bitrate=8000 // byte_ms,
+            latency_ms=2 * packet_ms + turnaround_ms + byte_ms * mtu,
+            flags=CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING,
+        )
+        self.broadcast_addr = w.BEACON_ALL
+        self.config = SeatracConfig(self, beacon_id, set_beacon_id, settings_len, id_offset, retry_ms, reboot_wait_ms)
+        self.last_fix = None  # the latest ACO_FIX with a range, as a dict
+        self.stats = {
+            "cmd_timeouts": 0,
+            "reboots": 0,
+            "stale": 0,  # responses to commands we no longer wait for
+            "stray": 0,  # acks and errors that match nothing in flight
+            "malformed": 0,
+            "unknown_cid": 0,
+            "statuses": 0,
+        }
+        self._dec = w.LineDecoder(w.SYNC_RSP, self)
+        self._msg = bytearray(w.MAX_MSG)
+        self._line = bytearray(2 * w.MAX_MSG + 8)
+        self._out = bytearray()
+        self._events = []
+        self._now = 0
+        self._state = _S_START
+        self._cmd = 0  # CID awaiting its response, 0 for none
+        self._cmd_deadline = 0
+        self._silent = 0  # commands timed out in a row
+        self._heard = None  # when the beacon last said anything valid
+        self._probe = False
+        self._probe_after = None
+        self._hold_until = None  # no acoustic command before this
+        self._up_s = None  # beacon uptime (s) at self._up_at
+        self._up_at = 0
+        self._h = 0
+        self.slot = AcousticSlot(self)
+
+    # -- timing model ------------------------------------------------------
+    def airtime_ms(self, nbytes):
+        return self.packet_ms + self.byte_ms * nbytes
+
+    def reply_window_ms(self):
+        # from the end of our packet to the end of the remote's automatic
+        # reply at the range limit: the beacon's own response timeout
+        return 2 * self.range_tmo_m * 1000 // self.vos + self.resp_time_ms + self.turnaround_ms + self.airtime_ms(0)
+
+    # -- the driver interface ----------------------------------------------
+    @property
+    def beacon_id(self):
+        return self.config.own_id
+
+    def ready(self, now):
+        return self._state == _S_UP and self.slot.state == IDLE
+
+    def send(self, now, addr, data, ack=False):
+        if not self.ready(now):
+            raise AcommError("SeaTrac not ready")
+        n = len(data)
+        if n > self.mtu:
+            raise EncodeError("%d bytes exceed the SeaTrac MTU of %d" % (n, self.mtu))
+        if not isinstance(addr, int) or not 0 <= addr <= 15:
+            raise EncodeError("SeaTrac beacon id %r outside 0..15" % (addr,))
+        if addr == w.BEACON_ALL:
+            mtype = self.oway_type  # broadcasts are one-way only
+        else:
+            mtype = self.ack_type if ack else self.oway_type
+        return self._accept(now, K_DAT, addr, mtype, data)
+
+    def ping(self, now, addr):
+        # Never raises (the link calls it without a guard): problems come
+        # back as EV_TX_FAILED for the returned handle.
+        if not isinstance(addr, int) or not 1 <= addr <= 15:
+            self._h = (self._h + 1) & 0xFFFF
+            self._events.append((EV_TX_FAILED, self._h, "cannot ping beacon id %r" % (addr,)))
+            return self._h
+        if not self.ready(now):
+            self._h = (self._h + 1) & 0xFFFF
+            self._events.append((EV_TX_FAILED, self._h, "SeaTrac not ready"))
+            return self._h
+        return self._accept(now, K_PING, addr, self.ping_type, b"")
+
+    def _accept(self, now, kind, addr, mtype, data):
+        self._h = (self._h + 1) & 0xFFFF
+        self.slot.accept(self._h, kind, addr, mtype, data)
+        self._pump(now)
+        return self._h
+
+    def feed(self, now, data):
+        self._now = now
+        self._dec.feed(data)
+        self._pump(now)
+
+    def poll(self, now):
+        self._now = now
+        if self._state == _S_START:
+            self._state = _S_CONFIG
+            self.config.start(now)
+        if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
+            self._cmd_timed_out(now)
+        if self.slot.poll(now):
+            self._probe = True  # silent: did it restart?
+        self._pump(now)
+
+    def take_events(self):
+        ev = self._events
+        if not ev:
+            return ev
+        self._events = []
+        return ev
+
+    def take_output(self):
+        if not self._out:
+            return b""
+        out = bytes(self._out)
+        self._out = bytearray()
+        return out
+
+    @property
+    def junk(self):
+        return self._dec.junk
+
+    # -- writing commands --------------------------------------------------
+    def command(self, now, cid, n):
+        # Writes self._msg[:n] (CID already at [0]) and occupies the slot.
+        self._msg[0] = cid
+        k = w.encode_into(self._line, w.SYNC_CMD, self._msg, n)
+        self._out.extend(memoryview(self._line)[:k])
+        self._cmd = cid
+        self._cmd_deadline = ticks_add(now, self.cmd_timeout_ms)
+
+    def _pump(self, now):
+        # Starts the next command if the slot is free: configuration first,
+        # then the link's frame, then probes.
+        if self._cmd:
+            return
+        if self._state != _S_UP:
+            if self._state == _S_CONFIG:
+                self.config.pump(now)
+            return
+        if self.slot.state == QUEUED and (self._hold_until is None or ticks_diff(now, self._hold_until) >= 0):
+            self._hold_until = None
+            cid, n = self.slot.build(self._msg)
+            self.command(now, cid, n)
+            return
+        due = self._probe and (self._probe_after is None or ticks_diff(now, self._probe_after) >= 0)
+        if not due and self.alive_period_ms and self._heard is not None:
+            due = ticks_diff(now, self._heard) >= self.alive_period_ms
+        if due:
+            self._probe = False
+            self._probe_after = ticks_add(now, self.probe_gap_ms)
+            self.command(now, w.CID_SYS_ALIVE, 1)
+
+    def _cmd_timed_out(self, now):
+        cid = self._cmd
+        self._cmd = 0
+        self.stats["cmd_timeouts"] += 1
+        self._silent += 1
+        if self._state == _S_CONFIG:
+            self.config.failed(now, "no response to command 0x%02X" % cid)
+            return
+        slot = self.slot
+        if slot.state == CMD:
+            # The command may have been carried out and only its answer
+            # lost: hold the next one until the beacon would be idle again.
+            self._hold_until = ticks_add(now, slot.busy_ms())
+            slot.fail("no response to %s" % ("PING_SEND" if slot.kind == K_PING else "DAT_SEND"))
+        if self._silent >= self.down_after:
+            self.lost(now, "modem not answering")
+        else:
+            self._probe = True
+
+    # -- state changes -----------------------------------------------------
+    def configured(self, now):
+        # called by the configuration sequence when it is done
+        self._state = _S_UP
+        self._silent = 0
+        self._events.append((EV_DRIVER_UP,))
+
+    def lost(self, now, reason):
+        # The beacon rebooted or fell silent: whatever it was doing is gone.
+        if self._state == _S_UP:
+            self._events.append((EV_DRIVER_DOWN, reason))
+            self.config.down_reported = True
+        if self.slot.state != IDLE:
+            self.slot.fail(reason)
+        self._hold_until = None
+        self._cmd = 0
+        self._probe = False
+        self._state = _S_CONFIG
+        self.config.start(now)
+
+    def uptime(self, now, secs, expected_reboot=False):
+        # Seconds since power-up reported by the beacon. Fewer than the last
+        # report plus the time since then (with slack for the 1 s resolution
+        # and clock drift) means it restarted behind our back.
+        prev = self._up_s
+        elapsed = ticks_diff(now, self._up_at)
+        self._up_s = secs
+        self._up_at = now
+        if prev is None or expected_reboot or self._state != _S_UP:
+            return False
+        if secs * 1000 + 2000 + elapsed // 100 < prev * 1000 + elapsed:
+            self.stats["reboots"] += 1
+            self.lost(now, "modem rebooted")
+            return True
+        return False
+
+    def forget_uptime(self):
+        self._up_s = None
+
+    # -- messages from the beacon (LineDecoder sink) -------------------------
+    def on_junk(self, kind):
+        # Text outside messages is what a rebooting beacon prints: ask it
+        # how long it has been up. Damaged lines are only counted.
+        if kind == w.JUNK_TEXT and self._state == _S_UP:
+            self._probe = True
+
+    def on_message(self, b, n):
+        now = self._now
+        cid = b[0]
+        self._heard = now
+        self._silent = 0
+        if cid == self._cmd:
+            self._cmd = 0
+            if self._state == _S_CONFIG:
+                self.config.response(now, b, n)
+            elif cid == w.CID_DAT_SEND or cid == w.CID_PING_SEND:
+                if self.slot.state == CMD and n >= 2:
+                    hold = self.slot.command_status(now, b[1])
+                    if hold is not None:
+                        self._hold_until = hold
+                else:
+                    self.stats["stale"] += 1
+            elif cid == w.CID_SYS_ALIVE and n >= 5:
+                self.uptime(now, w.u32(b, 1))
+            return
+        if cid == w.CID_DAT_RECEIVE:
+            self._dat_receive(now, b, n)
+        elif cid == w.CID_DAT_ERROR or cid == w.CID_PING_ERROR:
+            kind = K_DAT if cid == w.CID_DAT_ERROR else K_PING
+            if n >= 3 and self.slot.awaiting(kind, b[2]):
+                if kind == K_PING:
+                    self.slot.ranged(None, None, {"status": w.status_name(b[1])})
+                else:
+                    self.slot.dat_error(b[1])
+            else:
+                self.stats["stray"] += 1
+        elif cid == w.CID_PING_RESP:
+            self._ping_resp(b, n)
+        elif cid == w.CID_PING_REQ:
+            self._answering(now)
+        elif cid == w.CID_SYS_ALIVE or cid == w.CID_SYS_INFO:
+            # unsolicited: some firmware announces itself after a restart
+            if n >= 5:
+                self.uptime(now, w.u32(b, 1))
+        elif cid == w.CID_STATUS:
+            self.stats["statuses"] += 1
+            if n >= 10:
+                # TIMESTAMP: u64 ms since power-up (high word * 2**32 / 1000
+                # in seconds, kept in small ints)
+                self.uptime(now, w.u32(b, 2) // 1000 + w.u32(b, 6) * 4294967)
+        elif cid in _COMMANDS:
+            self.stats["stale"] += 1
+        else:
+            self.stats["unknown_cid"] += 1
+
+    def _answering(self, now):
+        # Our beacon heard a request for it and replies by itself; it would
+        # refuse a command of ours as busy meanwhile.
+        self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
+
+    def _dat_receive(self, now, b, n):
+        fl = w.fix_len(b, 1, n)
+        k = 1 + fl
+        if fl < 0 or k + 2 > n:
+            self.stats["malformed"] += 1
+            return
+        ack = b[k]
+        plen = b[k + 1]
+        extra = n - (k + 2 + plen)
+        if extra < 0 or extra > 1 or plen > 31:  # extra: the newer LOCAL_FLAG
+            self.stats["malformed"] += 1
+            return
+        dest = b[1]
+        src = b[2]
+        own = self.config.own_id
+        if ack:
+            if self.slot.awaiting(K_DAT, src) and (own is None or dest == own):
+                if b[3] & w.FIX_RANGE:
+                    self.last_fix = w.fix_dict(b, 1)
+                self.slot.delivered()
+            else:
+                self.stats["stray"] += 1
+            if not plen:
+                return
+        if src == 0 or src > 15:  # 0 is "unknown" as a source
+            self.stats["malformed"] += 1
+            return
+        self._events.append((EV_RX, src, dest, bytes(b[k + 2 : k + 2 + plen])))
+        if not ack and b[4] in REQ_TYPES and own is not None and dest == own:
+            self._answering(now)
+
+    def _ping_resp(self, b, n):
+        if w.fix_len(b, 1, n) < 0:
+            self.stats["malformed"] += 1
+            return
+        src = b[2]
+        if not self.slot.awaiting(K_PING, src):
+            self.stats["stray"] += 1
+            return
+        fix = w.fix_dict(b, 1)
+        metres = fix.get("range")
+        if metres is not None:
+            self.last_fix = fix
+        self.slot.ranged(src, metres, fix)
