@@ -353,7 +353,7 @@ class SeatracDriver:
     def _answering(self, now):
         # Our beacon heard a request for it and replies by itself; it would
         # refuse a command of ours as busy meanwhile.
-        self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
+        self._hold_until = ticks_add(now, self.turnaround_ms + self.resp_time_ms + self.airtime_ms(0))
 
     def _dat_receive(self, now, b, n):
         fl = w.fix_len(b, 1, n)
