@@ -1,0 +1,310 @@
+# An emulated Blueprint Subsea SeaTrac beacon (X150 USBL or X110 modem) that
+# speaks the real serial protocol, so acomm's driver, a terminal program or
+# someone else's software can drive it as they would a beacon on a USB-serial
+# adapter. Sans-IO like the drivers: feed(now, bytes), poll(now),
+# take_output(). Beacons exchange acoustic packets through a shared medium
+# (acomm_sim.medium); the acoustic side lives in seatrac_xcvr.
+#
+# Commands: SYS_ALIVE, SYS_INFO, SYS_REBOOT (check word 0x6A95), STATUS,
+# SETTINGS_GET/SET/LOAD/SAVE/RESET, XCVR_STATUS, PING_SEND, DAT_SEND.
+# Input: '#' lines, uppercase hex, CR, LF or both. A line with a bad CRC,
+# bad hex or an unknown CID is dropped without an answer (what real beacons
+# do was not confirmed; see docs/drivers.md).
+#
+# Fault modes, for driver tests: noise bytes, a wrong checksum or a
+# truncated line on the next output line(s), a command that is never
+# answered, and a reboot at any moment (mid-transfer included), with its
+# power-up text.
+
+from acomm.compat import ticks_add, ticks_diff
+from acomm.drivers import seatrac_wire as w
+
+from .seatrac_xcvr import Transceiver
+
+BANNER = (
+    b"Blueprint Subsea SeaTrac (acomm emulator)",
+    b"Bootloader OK, starting application",
+)
+
+
+def default_settings(beacon_id):
+    # SETTINGS_T in the 110-byte layout DUNE uses (see docs/drivers.md)
+    s = bytearray(110)
+    s[0] = 0  # STATUSMODE manual
+    s[1] = 0x07  # STATUS_OUTPUT: environment, attitude, mag cal
+    s[2] = 0x0D  # main UART 115200
+    s[3] = 0x0D
+    s[33:35] = (350).to_bytes(2, "little")  # salinity 35.0 ppt
+    s[35:37] = (15000).to_bytes(2, "little")  # VOS 1500.0 m/s
+    s[95] = 0x01  # XCVR_FLAGS: USBL uses AHRS
+    s[96] = beacon_id
+    s[97:99] = (1000).to_bytes(2, "little")  # xcvr_range_tmo, m
+    s[99:101] = (10).to_bytes(2, "little")  # xcvr_resp_time, ms
+    return s
+
+
+class SeatracEmulator:
+    def __init__(
+        self,
+        medium,
+        beacon_id=1,
+        now=0,
+        part=w.PART_X150,
+        serial=3689,
+        uptime_ms=0,
+        mtu=30,
+        local_flag=False,
+        packet_ms=500,
+        byte_ms=80,
+        turnaround_ms=300,
+        range_noise_m=0.0,
+        seed=1,
+        banner=BANNER,
+        boot_message=None,
+        boot_ms=1000,
+        hear_all=True,
+    ):
+        self.medium = medium
+        self.part = part
+        self.serial = serial
+        self.mtu = mtu
+        self.banner = banner
+        self.boot_message = boot_message  # None, w.CID_SYS_ALIVE or w.CID_SYS_INFO
+        self.boot_ms = boot_ms
+        # firmware as in the manual's SYS_INFO example
+        self.boot_fw = (0xFF, 912, 1, 0, 361, 0xBFC5FAB7)
+        self.main_fw = (0xFF, 913, 1, 0, 1914, 0xA9630475)
+        # the beacon's own sensors, in wire units
+        self.env = [12473, 194, 8, 0, 15000]  # mV, 0.1 C, mbar, dm, 0.1 m/s
+        self.attitude = [0, 0, 0]  # yaw, pitch, roll in 0.1 degree
+        self.mag_cal = [3, 0xFF, 1067, 94]
+        self.rssi = -650  # 0.1 dB, reported in every fix
+        self.eeprom = default_settings(beacon_id)
+        self.settings = bytearray(self.eeprom)
+        self.beacon_id = beacon_id
+        self._boot_at = ticks_add(now, -uptime_ms)
+        self._booting_until = None
+        self._now = now
+        self._dec = w.LineDecoder(w.SYNC_CMD, self)
+        self._out = bytearray()
+        self._line = bytearray(2 * w.MAX_MSG + 8)
+        self._faults = []  # [kind, cid or None, count, execute]
+        self._mute = 0  # CID whose answer is swallowed
+        self.commands = {}  # CID -> count, for tests
+        self.ignored = 0  # bad lines and unknown commands
+        self.xcvr = Transceiver(
+            self, medium, packet_ms, byte_ms, turnaround_ms, range_noise_m, seed, local_flag, hear_all
+        )
+        medium.attach(beacon_id, self.xcvr)
+
+    @property
+    def usbl(self):
+        return self.part == w.PART_X150
+
+    def uptime_ms(self, now):
+        return ticks_diff(now, self._boot_at)
+
+    # -- the serial port -----------------------------------------------------
+    def feed(self, now, data):
+        self._now = now
+        if self._booting_until is not None:
+            return  # the port is closed while the beacon restarts
+        self._dec.feed(data)
+
+    def poll(self, now):
+        self._now = now
+        self.medium.poll(now)
+        if self._booting_until is not None:
+            if ticks_diff(now, self._booting_until) < 0:
+                return
+            self._booted(now)
+        self.xcvr.poll(now)
+
+    def take_output(self):
+        if not self._out:
+            return b""
+        out = bytes(self._out)
+        self._out = bytearray()
+        return out
+
+    def emit(self, cid, payload):
+        # One '$' line, with any output fault that applies to it.
+        if self._mute and cid == self._mute:
+            self._mute = 0
+            return
+        msg = bytearray(1 + len(payload))
+        msg[0] = cid
+        msg[1:] = payload
+        line = self._line
+        k = w.encode_into(line, w.SYNC_RSP, msg, len(msg))
+        f = self._fault(("crc", "truncate"), cid)
+        if f is not None and f[0] == "crc":
+            c = line[k - 3]
+            line[k - 3] = 0x30 if c != 0x30 else 0x31  # one CRC digit off
+        elif f is not None:
+            keep = k // 2
+            line[keep] = 13
+            line[keep + 1] = 10
+            k = keep + 2 if f[3] else keep
+        self._out.extend(memoryview(line)[:k])
+
+    # -- fault modes -----------------------------------------------------------
+    def inject_noise(self, data):
+        self._out.extend(data)
+
+    def corrupt_next(self, cid=None, count=1):
+        self._faults.append(["crc", cid, count, False])
+
+    def truncate_next(self, cid=None, count=1, terminate=True):
+        # the line stops half way: with CR LF, or (terminate=False) with
+        # the next line's '$' as the only end
+        self._faults.append(["truncate", cid, count, terminate])
+
+    def swallow_next(self, cid=None, count=1, execute=False):
+        # the next command is never answered; with execute=True it is still
+        # carried out (only the answer is lost)
+        self._faults.append(["swallow", cid, count, execute])
+
+    def _fault(self, kinds, cid):
+        for f in self._faults:
+            if f[0] in kinds and (f[1] is None or f[1] == cid):
+                f[2] -= 1
+                if f[2] <= 0:
+                    self._faults.remove(f)
+                return f
+        return None
+
+    def reboot(self, now):
+        # Power cycle or watchdog: everything in flight is forgotten, the
+        # port goes quiet, then the power-up text appears.
+        self._booting_until = ticks_add(now, self.boot_ms)
+        self._boot_at = now
+        self._dec.reset()
+        self._mute = 0
+        self.xcvr.reset()
+        self.settings = bytearray(self.eeprom)
+        self.beacon_id = self.settings[96]
+        self.medium.cancel(self.xcvr.addr, now)
+        self.medium.detach(self.xcvr.addr)
+
+    def _booted(self, now):
+        self._booting_until = None
+        self.xcvr.addr = self.beacon_id
+        self.medium.attach(self.beacon_id, self.xcvr)
+        for ln in self.banner:
+            self._out.extend(ln)
+            self._out.extend(b"\r\n")
+        if self.boot_message == w.CID_SYS_ALIVE:
+            self._alive()
+        elif self.boot_message == w.CID_SYS_INFO:
+            self._info()
+
+    # -- commands ----------------------------------------------------------------
+    def on_junk(self, kind):
+        self.ignored += 1
+
+    def on_message(self, b, n):
+        now = self._now
+        cid = b[0]
+        self.commands[cid] = self.commands.get(cid, 0) + 1
+        f = self._fault(("swallow",), cid)
+        if f is not None:
+            if not f[3]:
+                return
+            self._mute = cid
+        if cid == w.CID_SYS_ALIVE:
+            self._alive()
+        elif cid == w.CID_SYS_INFO:
+            self._info()
+        elif cid == w.CID_SYS_REBOOT:
+            if n < 3:
+                self._status(cid, w.CST_CMD_PARAM_MISSING)
+            elif w.u16(b, 1) != w.REBOOT_CHECK:
+                self._status(cid, w.CST_CMD_PARAM_INVALID)
+            else:
+                self._status(cid, w.CST_OK)
+                self.reboot(now)
+        elif cid == w.CID_STATUS:
+            self._status_report(b[1] if n >= 2 and b[1] else self.settings[1])
+        elif cid == w.CID_SETTINGS_GET:
+            self.emit(cid, self.settings)
+        elif cid == w.CID_SETTINGS_SET:
+            if n - 1 < len(self.settings):
+                self._status(cid, w.CST_CMD_PARAM_MISSING)
+            elif n - 1 > len(self.settings) or not 1 <= b[97] <= 15:
+                self._status(cid, w.CST_CMD_PARAM_INVALID)
+            else:
+                self.settings[:] = memoryview(b)[1:n]
+                self._status(cid, w.CST_OK)
+        elif cid == w.CID_SETTINGS_LOAD:
+            self.settings = bytearray(self.eeprom)
+            self._status(cid, w.CST_OK)
+        elif cid == w.CID_SETTINGS_SAVE:
+            self.eeprom = bytearray(self.settings)
+            self._status(cid, w.CST_OK)
+        elif cid == w.CID_SETTINGS_RESET:
+            self.settings = default_settings(self.beacon_id)
+            self._status(cid, w.CST_OK)
+        elif cid == w.CID_XCVR_STATUS:
+            self._status(cid, self.xcvr.state(now))
+        elif cid == w.CID_PING_SEND:
+            st = self.xcvr.ping_send(now, b, n)
+            self.emit(cid, bytes((st, b[1] if n >= 2 else 0)))
+            self.xcvr.started(now, st)
+        elif cid == w.CID_DAT_SEND:
+            st = self.xcvr.dat_send(now, b, n)
+            self.emit(cid, bytes((st, b[1] if n >= 2 else 0)))
+            self.xcvr.started(now, st)
+        else:
+            self.ignored += 1
+        if self._mute == cid:
+            self._mute = 0  # the command had no answer to swallow
+
+    def _status(self, cid, st):
+        self.emit(cid, bytes((st,)))
+
+    def _alive(self):
+        self.emit(w.CID_SYS_ALIVE, (self.uptime_ms(self._now) // 1000).to_bytes(4, "little"))
+
+    def _info(self):
+        p = bytearray(38)
+        p[0:4] = (self.uptime_ms(self._now) // 1000).to_bytes(4, "little")
+        p[4] = 1  # running the application section
+        p[5:7] = self.part.to_bytes(2, "little")
+        p[7] = 1  # hardware revision
+        p[8:12] = self.serial.to_bytes(4, "little")
+        for o, fw in ((16, self.boot_fw), (27, self.main_fw)):
+            p[o] = fw[0]
+            p[o + 1 : o + 3] = fw[1].to_bytes(2, "little")
+            p[o + 3] = fw[2]
+            p[o + 4] = fw[3]
+            p[o + 5 : o + 7] = fw[4].to_bytes(2, "little")
+            p[o + 7 : o + 11] = fw[5].to_bytes(4, "little")
+        self.emit(w.CID_SYS_INFO, p)
+
+    def _status_report(self, flags):
+        # Groups in bit order; the calibration and raw AHRS groups are
+        # reported as zeros of the right size.
+        p = bytearray()
+        p.append(flags)
+        p.extend((self.uptime_ms(self._now) & 0xFFFFFFFF).to_bytes(4, "little"))
+        p.extend(bytes(4))
+        if flags & 0x01:
+            e = self.env
+            p.extend(_le(e[0], 2) + _le(e[1], 2) + _le(e[2], 4) + _le(e[3], 4) + _le(e[4], 2))
+        if flags & 0x02:
+            a = self.attitude
+            p.extend(_le(a[0], 2) + _le(a[1], 2) + _le(a[2], 2))
+        if flags & 0x04:
+            m = self.mag_cal
+            p.extend(bytes((m[0], m[1])) + _le(m[2], 4) + bytes((m[3],)))
+        for bit, size in ((0x08, 12), (0x10, 18), (0x20, 36)):
+            if flags & bit:
+                p.extend(bytes(size))
+        self.emit(w.CID_STATUS, p)
+
+
+def _le(v, n):
+    # little-endian two's complement of n bytes (MicroPython's int.to_bytes
+    # has no `signed`)
+    return (v & ((1 << (8 * n)) - 1)).to_bytes(n, "little")
