@@ -6,6 +6,7 @@
 #
 #   micropython tools/mp_runtests.py [tests/core] [-k substring]
 
+import gc
 import os
 import sys
 
@@ -89,6 +90,12 @@ def main(argv):
                 dt = _diff(_ms(), t0)
                 if dt > 2000:
                     print("slow", modname + "." + name, dt, "ms")
+            # Drop each test module once it has run, and collect: the unix
+            # port's heap is 2 MB, and tests that need large blocks (the
+            # queue flood) must not depend on how many modules ran before.
+            mod = fn = None
+            sys.modules.pop(modname, None)
+            gc.collect()
         sys.path.pop(0)
     for f in failures:
         print("FAILED", f)
