@@ -204,6 +204,8 @@ class SeatracEmulator:
         self.ignored += 1
 
     def on_message(self, b, n):
+        if self._booting_until is not None:
+            return  # the rest of a chunk that arrived with SYS_REBOOT
         now = self._now
         cid = b[0]
         self.commands[cid] = self.commands.get(cid, 0) + 1
