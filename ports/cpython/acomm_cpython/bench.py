@@ -18,6 +18,7 @@ BENCHES = {
     "core": "core_workload",
     "queue": "queue_workload",
     "discovery": "discovery_workload",
+    "codec": "codec_workload",
 }
 
 
