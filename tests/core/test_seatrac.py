@@ -240,6 +240,11 @@ def test_driver_detects_reboot_from_uptime():
     assert d.take_output() == b"#01C1C0\r\n"
     d.feed(5010, w.encode(w.SYNC_RSP, w.CID_SYS_ALIVE, (57).to_bytes(4, "little")))
     assert d.take_events() == [] and d.ready(5010)
+    # a beacon that announces itself with SYS_INFO after a restart
+    info = bytes(int(SYS_INFO_EXAMPLE[i : i + 2], 16) for i in range(3, len(SYS_INFO_EXAMPLE) - 6, 2))
+    d.feed(9000, w.encode(w.SYNC_RSP, w.CID_SYS_INFO, b"\x01\x00\x00\x00" + info[4:]))  # up 1 s
+    assert d.take_events() == [(EV_DRIVER_DOWN, "modem rebooted")] and not d.ready(9000)
+    assert d.take_output() == b"#0281C1\r\n"
 
 
 # -- byte-exact: the emulator ---------------------------------------------------
