@@ -1,7 +1,7 @@
 # Random and boundary values for codec fields, and a comparison that allows
 # the quantization error. Shared by the codec and catalog tests.
 
-from acomm.codec.fields import Array, Bool, Bytes, Enum, Fixed, Nested, Optional, UInt, Wide
+from acomm.codec.fields import Array, Bool, Bytes, Enum, Fixed, Nested, Optional, UInt
 from acomm.codec.text6 import ALPHABET, Text6
 
 

@@ -321,3 +321,31 @@ def test_random_bytes_raise_only_decode_errors():
             C.unpack(data)
         except DecodeError as e:
             assert isinstance(e.messages, list)
+
+
+def _doc_rows():
+    # the CADDY table of docs/codec.md: id, name, bits ("a..b" when variable)
+    f = __file__
+    i = f.rfind("/")
+    fh = open((f[:i] if i >= 0 else ".") + "/../../docs/codec.md")
+    try:
+        text = fh.read()
+    finally:
+        fh.close()
+    rows = []
+    for line in text[text.index("## CADDY"):].split("\n"):
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 5 and cells[0].isdigit():
+            rows.append((int(cells[0]), cells[1].strip("`"), cells[3], float(cells[4])))
+    return rows
+
+
+def test_the_documented_table_matches_the_catalog():
+    rows = _doc_rows()
+    assert len(rows) == len(C.messages)
+    for msg_id, name, bits, limit in rows:
+        m = C.by_id(msg_id)
+        assert m is not None and m.name == name, (msg_id, name)
+        lo, hi = C.id_bits + m.min_bits, C.bits(m)
+        assert bits == (str(hi) if lo == hi else "%d..%d" % (lo, hi)), (name, bits)
+        assert abs(C.limit_bits(m) - limit) < 0.05, (name, limit)
