@@ -266,6 +266,8 @@ class Link:
             # The bytes may already be on the air; we stop caring about them.
             fl.canceled = True
             self._final(fl.req, CANCELED, reason)
+            if fl.state == _IDLE:  # a ranging job between pings
+                fl.clear()
             return True
         req = self._acks.by_req_id(req_id)
         if req is not None:
@@ -299,7 +301,14 @@ class Link:
                 self._retry_or_fail(req, now, "no acknowledgement")
         for req in self.queue.expire(now):
             self._final(req, EXPIRED, "lifespan ended in the queue")
-        if fl.state == _IDLE and d.ready(now):
+        if fl.state == _IDLE and fl.kind == 3 and fl.req is not None:
+            # a ranging job between two pings
+            if ticks_diff(now, fl.req.deadline) >= 0:
+                self._finish_range(fl.req)
+            elif d.ready(now):
+                self._ping_next(now)
+                self._handle_driver_events(now)
+        elif fl.state == _IDLE and d.ready(now):
             self._start_next(now)
             self._handle_driver_events(now)
 
@@ -406,8 +415,12 @@ class Link:
         fl.state = _SENDING
         if idx[0] == 0:
             self._status(req.req_id, TRANSMITTING)
-        fl.handle = self.driver.ping(now, self.addr_map.addr_of(nid))
         self._last_tx = now
+        try:
+            fl.handle = self.driver.ping(now, self.addr_map.addr_of(nid))
+        except AcommError:
+            fl.handle = None
+            self._range_result(now, None)  # this node gets no range; go on
 
     def _range_result(self, now, metres):
         fl = self._fl
@@ -419,11 +432,17 @@ class Link:
             fl.clear()
             return
         if idx[0] < len(ids) and ticks_diff(now, req.deadline) < 0:
-            fl.state = _IDLE  # the next ping goes when the driver is ready
+            # the job stays in the slot (kind 3, state idle); poll() sends the
+            # next ping when the driver is ready
+            fl.state = _IDLE
             if self.driver.ready(now):
                 self._ping_next(now)
             return
-        fl.clear()
+        self._finish_range(req)
+
+    def _finish_range(self, req):
+        ids, results, _ = req.meta[1]
+        self._fl.clear()
         names = [self.names.name_of(i) for i in ids]
         self._emit((EV_RANGE_RECEIVED, self, req.req_id, names, results))
         got = 0

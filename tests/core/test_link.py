@@ -20,6 +20,7 @@ from acomm.events import (
     UNKNOWN,
     WAITING,
 )
+from acomm.errors import EncodeError
 from acomm.link import BROADCAST, Link
 from acomm.names import NameTable
 from linkcheck import Recorder, check_exactly_one_final
@@ -378,3 +379,46 @@ def test_channel_is_free_while_waiting_for_acks():
     link.poll(now)
     assert rec.final(1) == DELIVERED
     check_exactly_one_final(rec, [1, 2, 4])
+
+
+def test_ranging_waits_for_a_busy_driver_between_pings():
+    # the driver is not ready right after the first reply: the job must keep
+    # its place and not be overwritten by the next queued request
+    clk, drv, rec, link = make()
+    link.range(clk(), 7, ["diver", "auv"], 30)
+    link.request(clk(), 8, "diver", b"data", 30)
+    link.poll(clk())
+    h = drv.sent[-1][0]
+    drv.range_reply(h, 2, 50.0)
+    drv.busy = 99  # still busy with something of its own
+    link.poll(clk())
+    assert drv.sent[-1][0] == h  # nothing new yet
+    drv.busy = None
+    link.poll(clk())
+    assert drv.sent[-1][1:] == ("ping", 3)
+    drv.range_reply(drv.sent[-1][0], 3, 75.0)
+    link.poll(clk())
+    assert rec.final(7) == DELIVERED
+    assert rec.of(EV_RANGE_RECEIVED)[-1][4] == [50.0, 75.0]
+    link.poll(clk())
+    assert drv.sent[-1][2][1:] == b"data"
+    # cancel between pings, and a ping the driver refuses
+    link.range(clk(), 9, ["diver", "auv"], 30)
+    drv.finish()
+    link.poll(clk())
+    drv.range_reply(drv.sent[-1][0], 2, 1.0)
+    drv.busy = 99
+    link.poll(clk())
+    assert link.cancel(clk(), 9)
+    drv.busy = None
+    link.poll(clk())
+    assert rec.final(9) == CANCELED
+
+    def refuse(now, addr):
+        raise EncodeError("no")
+
+    drv.ping = refuse
+    link.range(clk(), 10, ["diver"], 30)
+    link.poll(clk())
+    assert rec.final(10) == FAILED
+    check_exactly_one_final(rec, [7, 8, 9, 10])
