@@ -19,6 +19,7 @@ from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
 from . import seatrac_wire as w
 from .seatrac_config import SeatracConfig
 from .seatrac_slot import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot
+from .base import SansIO
 
 _S_START = const(0)
 _S_CONFIG = const(1)  # (re)configuring; also "down" while the beacon is silent
@@ -35,7 +36,7 @@ _COMMANDS = (
 )
 
 
-class SeatracDriver:
+class SeatracDriver(SansIO):
     def __init__(
         self,
         beacon_id=None,
@@ -61,6 +62,7 @@ class SeatracDriver:
         reboot_wait_ms=2000,
         down_after=3,
     ):
+        SansIO.__init__(self)
         if not 1 <= mtu <= 31:
             raise AcommError("SeaTrac DAT payloads are 1..31 bytes, not %d" % mtu)
         if beacon_id is not None and not 1 <= beacon_id <= 15:
@@ -105,8 +107,6 @@ class SeatracDriver:
         self._dec = w.LineDecoder(w.SYNC_RSP, self)
         self._msg = bytearray(w.MAX_MSG)
         self._line = bytearray(2 * w.MAX_MSG + 8)
-        self._out = bytearray()
-        self._events = []
         self._now = 0
         self._state = _S_START
         self._cmd = 0  # CID awaiting its response, 0 for none
@@ -186,20 +186,6 @@ class SeatracDriver:
         if self.slot.poll(now):
             self._probe = True  # silent: did it restart?
         self._pump(now)
-
-    def take_events(self):
-        ev = self._events
-        if not ev:
-            return ev
-        self._events = []
-        return ev
-
-    def take_output(self):
-        if not self._out:
-            return b""
-        out = bytes(self._out)
-        self._out = bytearray()
-        return out
 
     @property
     def junk(self):

@@ -9,12 +9,14 @@ from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_RX, EV_TX_DONE
 from ..slip import SlipDecoder, encode_into
 from ..errors import EncodeError
+from .base import SansIO
 
 _OUT_CAP = const(1024)
 
 
-class TransparentDriver:
+class TransparentDriver(SansIO):
     def __init__(self, baud=9600, mtu=255, turnaround_ms=0, model="transparent serial"):
+        SansIO.__init__(self)
         self.baud = baud
         self.mtu = mtu
         self.turnaround_ms = turnaround_ms
@@ -31,8 +33,6 @@ class TransparentDriver:
         self.broadcast_addr = None
         self._dec = SlipDecoder(mtu + 8)
         self._frames = []
-        self._events = []
-        self._out = bytearray()
         self._slip = bytearray(2 * mtu + 2)
         self._busy_until = None
         self._handle = 0
@@ -74,20 +74,6 @@ class TransparentDriver:
         if self._tx_handle is not None and ticks_diff(now, self._busy_until) >= 0:
             self._events.append((EV_TX_DONE, self._tx_handle))
             self._tx_handle = None
-
-    def take_events(self):
-        ev = self._events
-        if not ev:
-            return ev
-        self._events = []
-        return ev
-
-    def take_output(self):
-        if not self._out:
-            return b""
-        out = bytes(self._out)
-        self._out = bytearray()
-        return out
 
     @property
     def decoder_stats(self):

@@ -20,6 +20,7 @@ from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers import seatrac_wire as w
 
 from .seatrac_xcvr import Transceiver
+from acomm.drivers.base import SansIO
 
 BANNER = (
     b"Blueprint Subsea SeaTrac (acomm emulator)",
@@ -43,7 +44,7 @@ def default_settings(beacon_id):
     return s
 
 
-class SeatracEmulator:
+class SeatracEmulator(SansIO):
     def __init__(
         self,
         medium,
@@ -64,6 +65,7 @@ class SeatracEmulator:
         boot_ms=1000,
         hear_all=True,
     ):
+        SansIO.__init__(self)
         self.medium = medium
         self.part = part
         self.serial = serial
@@ -119,13 +121,6 @@ class SeatracEmulator:
                 return
             self._booted(now)
         self.xcvr.poll(now)
-
-    def take_output(self):
-        if not self._out:
-            return b""
-        out = bytes(self._out)
-        self._out = bytearray()
-        return out
 
     def emit(self, cid, payload):
         # One '$' line, with any output fault that applies to it.
