@@ -57,6 +57,18 @@ def log2_series(step, count):
     return count * step + math.log2(s)
 
 
+def write_count(w, n, fixed, most, prefix_bits, unit):
+    # The length rule of Bytes and Array: a fixed size must match exactly; a
+    # variable one is bounded and goes on the wire as a prefix.
+    if fixed:
+        if n != most:
+            raise fail(EncodeError, "%d %s, needs exactly %d" % (n, unit, most))
+        return
+    if n > most:
+        raise fail(EncodeError, "%d %s, at most %d" % (n, unit, most))
+    w.write(n, prefix_bits)
+
+
 class Field:
     saturate = False
 
@@ -213,14 +225,7 @@ class Bytes(Field):
     def encode(self, w, v):
         if isinstance(v, str) or not isinstance(v, (bytes, bytearray, memoryview)):
             raise fail(EncodeError, "%s is not bytes" % type(v).__name__)
-        n = len(v)
-        if self.fixed:
-            if n != self.max_len:
-                raise fail(EncodeError, "%d bytes, needs exactly %d" % (n, self.max_len))
-        else:
-            if n > self.max_len:
-                raise fail(EncodeError, "%d bytes, at most %d" % (n, self.max_len))
-            w.write(n, self.len_bits)
+        write_count(w, len(v), self.fixed, self.max_len, self.len_bits, "bytes")
         w.write_bytes(v)
 
     def decode(self, r):
@@ -273,13 +278,7 @@ class Array(Field):
         if isinstance(v, (str, bytes, dict)):
             raise fail(EncodeError, "%s is not a list" % type(v).__name__)
         n = len(v)
-        if self.fixed:
-            if n != self.max_count:
-                raise fail(EncodeError, "%d items, needs exactly %d" % (n, self.max_count))
-        else:
-            if n > self.max_count:
-                raise fail(EncodeError, "%d items, at most %d" % (n, self.max_count))
-            w.write(n, self.count_bits)
+        write_count(w, n, self.fixed, self.max_count, self.count_bits, "items")
         f = self.field
         i = 0
         try:
