@@ -106,7 +106,10 @@ class Link:
         self.discovery = Discovery(advert_period_ms, lost_after)
         self.addr_map = addr_map if addr_map is not None else AddressMap(True, driver.broadcast_addr)
         self.elided = driver.caps.has(CAP_ADDRESSING)
-        self.framing = LinkFraming(node_id, self.elided, self.addr_map, driver.caps.mtu_tx)
+        # who confirms delivery: the modem (its own acks, on elided links
+        # of reliable modems) or this link (acomm ACK frames)
+        self.modem_acks = self.elided and driver.caps.has(CAP_RELIABLE)
+        self.framing = LinkFraming(node_id, self.elided, self.addr_map, driver.caps.mtu_tx, not self.modem_acks)
         self.seq_mod = self.framing.seq_mod
         self.max_retries = max_retries
         self.dup_window_ms = dup_window_ms
@@ -390,10 +393,10 @@ class Link:
                 while self._acks.seq_in_use(req.dst, seq):
                     seq = self._next_seq()
             req.meta[1] = seq
-        flags = fr.F_ACK_REQ if (want_ack and not self.elided) else 0
+        flags = fr.F_ACK_REQ if (want_ack and not self.modem_acks) else 0
         try:
             addr, data = self.framing.encode(fr.DATA, req.dst, seq, req.data, flags)
-            fl.handle = d.send(now, addr, data, want_ack and self.elided)
+            fl.handle = d.send(now, addr, data, want_ack and self.modem_acks)
         except AcommError as e:
             fl.clear()
             self._final(req, FAILED, "driver refused the frame: %s" % e)

@@ -13,27 +13,32 @@ from .errors import DecodeError
 
 
 class LinkFraming:
-    def __init__(self, node_id, elided, addr_map, mtu):
+    def __init__(self, node_id, elided, addr_map, mtu, link_acks=False):
         self.node_id = node_id
         self.elided = elided
+        self.link_acks = link_acks
         self.addr_map = addr_map
         self.seq_mod = fr.SEQ_MOD_ELIDED if elided else fr.SEQ_MOD_RAW
-        self.worst_overhead = fr.ELIDED_OVERHEAD if elided else fr.RAW_OVERHEAD_WIDE
+        if elided:
+            self.worst_overhead = fr.ELIDED_OVERHEAD + (1 if link_acks else 0)
+        else:
+            self.worst_overhead = fr.RAW_OVERHEAD_WIDE
         self._mtu = mtu
         self._buf = bytearray(mtu + fr.RAW_OVERHEAD_WIDE)
 
     def mtu_for(self, dst_id):
         # payload bytes one frame to dst_id can carry
         if self.elided:
-            return self._mtu - fr.ELIDED_OVERHEAD
+            return self._mtu - self.worst_overhead
         return self._mtu - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
 
     def encode(self, ftype, dst_id, seq, payload, flags=0):
-        # -> (interface address or None, frame bytes). The flags travel only
-        # in raw frames; an elided link asks the modem for what they mean.
+        # -> (interface address or None, frame bytes). On an elided link
+        # whose modem acknowledges, the modem is asked for what the flags
+        # mean and they stay off the air.
         buf = self._buf
         if self.elided:
-            n = fr.encode_elided_into(buf, ftype, seq, payload, 0)
+            n = fr.encode_elided_into(buf, ftype, seq, payload, flags if self.link_acks else 0)
             addr = self.addr_map.broadcast if dst_id is None else self.addr_map.addr_of(dst_id)
         else:
             d = fr.BROADCAST if dst_id is None else dst_id

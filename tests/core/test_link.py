@@ -114,6 +114,34 @@ def test_modem_ack_gives_delivered():
     check_exactly_one_final(rec, [1])
 
 
+def test_addressing_modem_without_acks_gets_link_acks():
+    # A modem that addresses frames but never reports delivery (Benthos):
+    # the elided frame asks for an ack in its flags byte, and the peer's
+    # link answers with an elided ACK frame.
+    from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST
+
+    clk, drv, rec, link = make(CAP_ADDRESSING | CAP_BROADCAST)
+    assert link.mtu_for(2) == 30  # one header byte and the flags byte
+    link.request(clk(), 1, "diver", b"hi", 10, ack=True)
+    link.poll(clk())
+    h, addr, data, ack = drv.sent[0]
+    assert addr == 2 and ack is False
+    f = fr.decode_elided(data, 1, 2)
+    assert f.flags == fr.F_ACK_REQ and f.payload == b"hi"
+    drv.finish(h)
+    link.poll(clk())
+    assert rec.statuses(1) == [QUEUED, TRANSMITTING, WAITING]
+    drv.receive(2, 1, elided(fr.ACK, f.seq))
+    link.poll(clk())
+    assert rec.statuses(1)[-1] == DELIVERED
+    # and it acknowledges what it receives
+    drv.receive(2, 1, fr.encode_elided(fr.Frame(fr.DATA, 0, 0, 5, b"yo", fr.F_ACK_REQ)))
+    link.poll(clk())
+    h2, addr2, data2, _ = drv.sent[-1]
+    assert addr2 == 2 and fr.decode_elided(data2, 1, 2).ftype == fr.ACK
+    check_exactly_one_final(rec, [1])
+
+
 def test_modem_failure_retries_then_fails():
     clk, drv, rec, link = make(max_retries=1)
     link.request(clk(), 1, "diver", b"hi", 60, ack=True)
