@@ -15,6 +15,11 @@ def main(argv=None):
     d.add_argument("--seed", type=int, default=1)
     d.add_argument("--json", action="store_true", help="print the summary as JSON")
 
+    e = sub.add_parser("emulate", help="an emulated modem on a pseudo-terminal (and TCP)")
+    from . import emulate
+
+    emulate.add_arguments(e)
+
     args = p.parse_args(argv)
     if args.cmd == "bench":
         from . import bench
@@ -24,6 +29,8 @@ def main(argv=None):
         from . import demo
 
         return demo.main(args)
+    if args.cmd == "emulate":
+        return emulate.main(args)
     p.print_help()
     return 2
 

@@ -7,6 +7,8 @@
 #   the bytes (a frame is at most a few hundred bytes; the OS buffer is
 #   kilobytes), unless the port was opened with a write_timeout.
 #
+# TcpStream: a TCP client with the same API that reconnects with back-off.
+#
 # PtyPair: two pseudo-terminals joined like two USB-serial adapters with a
 #   null-modem cable between them. A pty on its own is not a cable: its slave
 #   (/dev/pts/N) is one end and its master fd the other, and only the slave
@@ -19,7 +21,9 @@
 import errno
 import os
 import select
+import socket
 import threading
+import time
 import termios
 import tty
 
@@ -238,3 +242,134 @@ class PtyPair:
             self.close()
         except Exception:
             pass
+
+
+class TcpStream:
+    # A TCP client with the stream API the Node uses, for modems reached over
+    # Ethernet (EvoLogics: raw TCP, port 9200). Never blocks: the connection
+    # is made in the background of read()/write() calls, and when it drops
+    # it is made again after a back-off that doubles from `backoff_s[0]` up
+    # to `backoff_s[1]`. Bytes written while disconnected are dropped and
+    # counted: the driver above times out and repeats what matters, as it
+    # would after line noise. `connects` counts the connections made, so a
+    # driver's owner can tell the modem's session was renewed.
+    def __init__(self, host, port, backoff_s=(0.5, 10.0), max_pending=1 << 16):
+        self.host = host
+        self.port = port
+        self.backoff_s = backoff_s
+        self.max_pending = max_pending
+        self.sock = None
+        self._connecting = False
+        self._pending = bytearray()
+        self._wait = backoff_s[0]
+        self._next_try = 0.0
+        self.connects = 0
+        self.dropped = 0
+        self._closed = False
+        self._try_connect()
+
+    @property
+    def connected(self):
+        return self.sock is not None and not self._connecting
+
+    def _try_connect(self):
+        if self._closed or time.monotonic() < self._next_try:
+            return
+        s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        s.setblocking(False)
+        err = s.connect_ex((self.host, self.port))
+        if err not in (0, errno.EINPROGRESS, errno.EWOULDBLOCK, errno.EALREADY):
+            s.close()
+            self._backoff()
+            return
+        self.sock = s
+        self._connecting = True
+        self._check_connected()
+
+    def _check_connected(self):
+        _, w, _ = select.select([], [self.sock], [], 0)
+        if not w:
+            return False
+        err = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
+        if err:
+            self._lost()
+            return False
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._connecting = False
+        self._wait = self.backoff_s[0]
+        self.connects += 1
+        return True
+
+    def _backoff(self):
+        self._next_try = time.monotonic() + self._wait
+        self._wait = min(self._wait * 2, self.backoff_s[1])
+
+    def _lost(self):
+        if self.sock is not None:
+            self.sock.close()
+        self.sock = None
+        self._connecting = False
+        self.dropped += len(self._pending)
+        self._pending = bytearray()
+        self._backoff()
+
+    def _ready(self):
+        if self.sock is None:
+            self._try_connect()
+            if self.sock is None:
+                return False
+        if self._connecting and not self._check_connected():
+            return False
+        return True
+
+    def read(self, n=-1):
+        if not self._ready():
+            return b""
+        self._flush()
+        if self.sock is None:
+            return b""
+        try:
+            data = self.sock.recv(_CHUNK if n is None or n < 0 else n)
+        except (BlockingIOError, InterruptedError):
+            return b""
+        except OSError:
+            data = b""
+        if not data:
+            self._lost()
+        return data
+
+    def write(self, data):
+        if not self._ready():
+            self.dropped += len(data)
+            return len(data)
+        self._pending.extend(data)
+        if len(self._pending) > self.max_pending:
+            k = len(self._pending) - self.max_pending
+            del self._pending[:k]
+            self.dropped += k
+        self._flush()
+        return len(data)
+
+    def _flush(self):
+        if not self._pending or self.sock is None:
+            return
+        try:
+            n = self.sock.send(self._pending)
+        except (BlockingIOError, InterruptedError):
+            n = 0
+        except OSError:
+            self._lost()
+            return
+        del self._pending[:n]
+
+    def close(self):
+        self._closed = True
+        if self.sock is not None:
+            self.sock.close()
+            self.sock = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

@@ -1,0 +1,321 @@
+# `acomm emulate <modem> --link PATH`: an emulated modem on a pseudo-terminal,
+# so that acomm's drivers, someone else's software or a terminal program can
+# talk to it exactly as to a modem behind a USB-serial adapter.
+#
+# The emulators themselves are sans-IO (ports/sim/acomm_sim); this module is
+# only their I/O: it makes a pty per modem (a symlink to its slave at the
+# path given), optional TCP listeners (EvoLogics modems are reached over TCP
+# port 9200 as well as serial), and a select() loop that feeds what arrives
+# to the emulator with the current time, polls it, and writes its output.
+#
+# All modems of one process share one acoustic medium. The first is the one
+# at --link; each --peer adds another, on its own pty when a path is given,
+# otherwise headless (it still acknowledges and answers pings, as a modem in
+# the water does). --time-scale runs the emulated world faster than real
+# time (airtimes and propagation shrink; useful for tests).
+
+import os
+import select
+import signal
+import socket
+import sys
+import time
+
+from .streams import _set_raw
+
+# name -> (module, class, default TCP port or None)
+MODEMS = {
+    "seatrac": ("acomm_sim.seatrac", "SeatracEmulator", None),
+    "evologics": ("acomm_sim.evologics", "EvologicsEmulator", 9200),
+    "micromodem": ("acomm_sim.micromodem", "MicroModemEmulator", None),
+    "benthos": ("acomm_sim.benthos", "BenthosEmulator", None),
+}
+
+_CHUNK = 4096
+_MAX_BACKLOG = 1 << 16  # bytes held for a reader that does not read
+
+
+def emulator_class(modem):
+    if modem not in MODEMS:
+        raise ValueError("unknown modem %r (one of %s)" % (modem, ", ".join(sorted(MODEMS))))
+    mod, cls, _ = MODEMS[modem]
+    m = __import__(mod, None, None, [cls])
+    return getattr(m, cls)
+
+
+def parse_value(text):
+    # --option values: int, float, true/false, or a string
+    low = text.lower()
+    if low in ("true", "yes", "on"):
+        return True
+    if low in ("false", "no", "off"):
+        return False
+    for conv in (int, float):
+        try:
+            return conv(text)
+        except ValueError:
+            pass
+    return text
+
+
+def parse_peer(text):
+    # "ADDR" or "ADDR:PATH" or "ADDR:PATH:DISTANCE" ("ADDR::DISTANCE" headless)
+    parts = text.split(":")
+    addr = int(parts[0])
+    path = parts[1] if len(parts) > 1 and parts[1] else None
+    dist = float(parts[2]) if len(parts) > 2 and parts[2] else None
+    return addr, path, dist
+
+
+class Pty:
+    # One pseudo-terminal: the slave is the "serial port" users open (its
+    # name is symlinked at `link`); we hold the master. The slave stays open
+    # here too, so the master does not read EIO while nobody has the port.
+    def __init__(self, link):
+        self.master, self.slave = os.openpty()
+        _set_raw(self.slave)
+        os.set_blocking(self.master, False)
+        self.device = os.ttyname(self.slave)
+        self.link = link
+        self.backlog = bytearray()
+        if link:
+            if os.path.lexists(link):
+                if not os.path.islink(link):
+                    self.close()
+                    raise FileExistsError("%s exists and is not a symlink; not replacing it" % link)
+                os.unlink(link)
+            os.symlink(self.device, link)
+
+    def read(self):
+        try:
+            return os.read(self.master, _CHUNK)
+        except BlockingIOError:
+            return b""
+        except OSError:
+            return b""
+
+    def write(self, data):
+        self.backlog.extend(data)
+        self.flush()
+
+    def flush(self):
+        if not self.backlog:
+            return
+        try:
+            n = os.write(self.master, self.backlog)
+        except (BlockingIOError, OSError):
+            n = 0
+        del self.backlog[:n]
+        if len(self.backlog) > _MAX_BACKLOG:
+            # nobody reads the port: like a UART, drop the oldest bytes
+            del self.backlog[: len(self.backlog) - _MAX_BACKLOG]
+
+    def close(self):
+        if self.link and os.path.islink(self.link) and os.readlink(self.link) == self.device:
+            os.unlink(self.link)
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+
+class TcpPort:
+    # A listening socket whose clients all share one modem, as on an
+    # EvoLogics modem: what any client writes goes to the modem, and what the
+    # modem says goes to every client.
+    def __init__(self, host, port):
+        self.server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.server.bind((host, port))
+        self.server.listen(4)
+        self.server.setblocking(False)
+        self.port = self.server.getsockname()[1]
+        self.clients = []
+
+    def accept(self):
+        try:
+            c, _ = self.server.accept()
+        except (BlockingIOError, OSError):
+            return
+        c.setblocking(False)
+        c.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.clients.append(c)
+
+    def read(self, c):
+        try:
+            data = c.recv(_CHUNK)
+        except BlockingIOError:
+            return b""
+        except OSError:
+            data = b""
+        if not data:
+            self.drop(c)
+        return data
+
+    def write(self, data):
+        for c in list(self.clients):
+            try:
+                c.sendall(data)
+            except OSError:
+                self.drop(c)
+
+    def drop(self, c):
+        if c in self.clients:
+            self.clients.remove(c)
+        c.close()
+
+    def close(self):
+        for c in list(self.clients):
+            self.drop(c)
+        self.server.close()
+
+
+class Station:
+    # One emulated modem and the ports it is reached through.
+    def __init__(self, emu, address, pty=None, tcp=None):
+        self.emu = emu
+        self.address = address
+        self.pty = pty
+        self.tcp = tcp
+
+
+class EmulatorHost:
+    def __init__(self, modem, link, address=1, peers=(), options=None, distance=100.0, loss=0.0,
+                 seed=1, time_scale=1.0, tcp_port=None, tcp_host="127.0.0.1"):
+        from acomm_sim.medium import Medium
+
+        cls = emulator_class(modem)
+        self.modem = modem
+        self.time_scale = float(time_scale)
+        self._t0 = time.monotonic()
+        self.medium = Medium(default_distance=distance, loss=loss, seed=seed)
+        self.stations = []
+        opts = dict(options or {})
+        now = self.now()
+        try:
+            tcp = TcpPort(tcp_host, tcp_port) if tcp_port is not None else None
+            self.stations.append(Station(cls(self.medium, address, now=now, **opts), address, Pty(link), tcp))
+            for addr, path, dist in peers:
+                emu = cls(self.medium, addr, now=now, **opts)
+                self.stations.append(Station(emu, addr, Pty(path) if path else None))
+                if dist is not None:
+                    self.medium.set_distance(address, addr, dist)
+        except BaseException:
+            self.close()
+            raise
+
+    def now(self):
+        return int((time.monotonic() - self._t0) * 1000 * self.time_scale) & 0x3FFFFFFF
+
+    @property
+    def device(self):
+        return self.stations[0].pty.device
+
+    def step(self, timeout_s=0.01):
+        rd = []
+        for st in self.stations:
+            if st.pty:
+                rd.append(st.pty.master)
+            if st.tcp:
+                rd.append(st.tcp.server)
+                rd.extend(st.tcp.clients)
+        try:
+            r, _, _ = select.select(rd, [], [], timeout_s)
+        except (OSError, ValueError):
+            r = []
+        now = self.now()
+        for st in self.stations:
+            if st.pty and st.pty.master in r:
+                data = st.pty.read()
+                if data:
+                    st.emu.feed(now, data)
+            if st.tcp:
+                if st.tcp.server in r:
+                    st.tcp.accept()
+                for c in list(st.tcp.clients):
+                    if c in r:
+                        data = st.tcp.read(c)
+                        if data:
+                            st.emu.feed(now, data)
+        self.medium.poll(now)
+        for st in self.stations:
+            st.emu.poll(now)
+        self.medium.poll(now)
+        for st in self.stations:
+            out = st.emu.take_output()
+            if st.pty:
+                if out:
+                    st.pty.write(out)
+                else:
+                    st.pty.flush()
+            if out and st.tcp:
+                st.tcp.write(out)
+
+    def run(self, stop=None):
+        while stop is None or not stop():
+            self.step()
+
+    def close(self):
+        for st in self.stations:
+            if st.pty:
+                st.pty.close()
+            if st.tcp:
+                st.tcp.close()
+        self.stations = []
+
+
+def add_arguments(p):
+    p.add_argument("modem", choices=sorted(MODEMS), help="which modem to emulate")
+    p.add_argument("--link", required=True, help="path of the symlink to the pseudo-terminal (the 'serial port')")
+    p.add_argument("--address", type=int, default=1, help="the emulated modem's own address (default 1)")
+    p.add_argument("--peer", action="append", default=[], metavar="ADDR[:PATH[:METRES]]",
+                   help="another emulated modem in the water, on its own pty when PATH is given")
+    p.add_argument("--distance", type=float, default=100.0, help="default distance between modems, m")
+    p.add_argument("--loss", type=float, default=0.0, help="probability that a packet is lost")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--time-scale", type=float, default=1.0, help="emulated seconds per real second")
+    p.add_argument("--tcp", type=int, default=None, nargs="?", const=-1, metavar="PORT",
+                   help="also serve the modem over TCP (EvoLogics: port 9200 by default)")
+    p.add_argument("--tcp-host", default="127.0.0.1")
+    p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                   help="emulator option, e.g. packet_ms=100 (repeatable)")
+
+
+def main(args):
+    options = {}
+    for kv in args.option:
+        if "=" not in kv:
+            print("--option wants KEY=VALUE, got %r" % kv, file=sys.stderr)
+            return 2
+        k, v = kv.split("=", 1)
+        options[k.strip()] = parse_value(v.strip())
+    tcp = args.tcp
+    if tcp == -1:
+        tcp = MODEMS[args.modem][2] or 0
+    try:
+        host = EmulatorHost(args.modem, args.link, args.address, [parse_peer(p) for p in args.peer], options,
+                            args.distance, args.loss, args.seed, args.time_scale, tcp, args.tcp_host)
+    except ImportError as e:
+        print("the %s emulator is not available: %s" % (args.modem, e), file=sys.stderr)
+        return 1
+    except (OSError, TypeError, ValueError) as e:
+        print("cannot start the %s emulator: %s" % (args.modem, e), file=sys.stderr)
+        return 1
+    stopping = []
+
+    def stop(*_):
+        stopping.append(1)
+
+    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
+    for st in host.stations:
+        where = "%s -> %s" % (st.pty.link, st.pty.device) if st.pty and st.pty.link else "headless"
+        if st.tcp:
+            where += ", tcp %s:%d" % (args.tcp_host, st.tcp.port)
+        print("%s emulator, address %d: %s" % (args.modem, st.address, where), flush=True)
+    try:
+        host.run(lambda: stopping)
+    finally:
+        host.close()
+    return 0
