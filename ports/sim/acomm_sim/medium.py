@@ -85,10 +85,9 @@ class Medium:
         for dst in self._stations:
             if dst == src:
                 continue
-            if self.loss and self.rng.chance(self.loss):
-                self.lost += 1
-                continue
             d = self.distance(src, dst)
+            if self._lost_on_the_way(d):
+                continue
             prop = int(d * 1000 / self.sound_speed)
             self._seq += 1
             item = [ticks_add(end, prop), self._seq, dst, src, packet, ticks_add(now, prop), d]
@@ -98,6 +97,13 @@ class Medium:
                 i -= 1
             f.insert(i, item)
         return end
+
+    def _lost_on_the_way(self, distance):
+        # decided when the packet leaves (the acoustic channel adds range)
+        if self.loss and self.rng.chance(self.loss):
+            self.lost += 1
+            return True
+        return False
 
     def cancel(self, src, now):
         # src stops transmitting at `now` (a modem that restarts mid-packet):
@@ -124,15 +130,23 @@ class Medium:
     def poll(self, now):
         f = self._flight
         while f and ticks_diff(f[0][0], now) <= 0:
-            end, _, dst, src, packet, start, d = f.pop(0)
+            item = f.pop(0)
+            end, _, dst, src, packet, start, d = item
             st = self._stations.get(dst)
             if st is None:
+                continue
+            if self._lost_on_arrival(item):
                 continue
             if self._overlaps(dst, start, end):
                 self.deaf += 1
                 continue
             self.delivered += 1
             st.receive(end, src, packet, d)
+
+    def _lost_on_arrival(self, item):
+        # what the acoustic channel decides at the receiver (collisions,
+        # noise); the plain medium loses nothing there
+        return False
 
     def in_flight(self):
         return len(self._flight)

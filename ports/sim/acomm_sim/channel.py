@@ -1,0 +1,175 @@
+# The acoustic channel of the simulated ocean: the shared Medium of the modem
+# emulators (same interface, so every emulator runs on it unchanged) with
+# what a real channel adds:
+#
+# - motion: a node moves along waypoints at a speed, or drifts at a constant
+#   velocity; distances are taken when a packet leaves;
+# - collisions: two packets whose arrivals overlap at a receiver corrupt each
+#   other there (both are lost at that receiver, not elsewhere);
+# - loss that grows with range, from a piecewise-linear curve of
+#   (metres, probability) points, beyond its last point certain loss unless
+#   the curve says otherwise, plus a fixed probability (Medium's `loss`);
+# - noise bursts: intervals in which nothing is heard (everywhere, or at one
+#   receiver).
+#
+# Half-duplex comes from Medium: a station that transmits during any part
+# of a reception does not hear it. Counters say why each copy was lost.
+# Portable Python (runs on the MicroPython unix port with the core tests).
+
+from acomm.compat import ticks_add, ticks_diff
+
+from .medium import Medium
+
+
+def interpolate(curve, x):
+    # curve: ((x0, y0), (x1, y1), ...) with x increasing
+    if not curve:
+        return 0.0
+    if x <= curve[0][0]:
+        return curve[0][1]
+    for i in range(1, len(curve)):
+        x1, y1 = curve[i]
+        if x <= x1:
+            x0, y0 = curve[i - 1]
+            return y0 + (y1 - y0) * (x - x0) / (x1 - x0)
+    return curve[-1][1]
+
+
+class Track:
+    # Where a node is at time t (ms, ticks): still, drifting, or following
+    # waypoints at a constant speed (and staying at the last one).
+    def __init__(self, start, t0=0, velocity=None, waypoints=None, speed=1.0):
+        self.start = start  # (east, north, depth) m
+        self.t0 = t0
+        self.velocity = velocity  # (ve, vn, vd) m/s
+        self.legs = []  # (t_start_ms, t_end_ms, from, to)
+        if waypoints:
+            t = 0
+            here = start
+            for wp in waypoints:
+                d = _dist(here, wp)
+                dt = int(d * 1000 / speed) if speed > 0 else 0
+                self.legs.append((t, t + dt, here, wp))
+                t += dt
+                here = wp
+
+    def at(self, t):
+        el = ticks_diff(t, self.t0)
+        if el < 0:
+            el = 0
+        if self.legs:
+            for t1, t2, a, b in self.legs:
+                if el < t2:
+                    f = (el - t1) / (t2 - t1) if t2 > t1 else 1.0
+                    return (a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f)
+            return self.legs[-1][3]
+        if self.velocity:
+            s = el / 1000
+            v = self.velocity
+            return (self.start[0] + v[0] * s, self.start[1] + v[1] * s, self.start[2] + v[2] * s)
+        return self.start
+
+
+def _dist(a, b):
+    return ((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2) ** 0.5
+
+
+class Channel(Medium):
+    def __init__(self, default_distance=100.0, loss=0.0, seed=1, sound_speed=1500.0, loss_curve=None,
+                 collisions=True, now=0):
+        Medium.__init__(self, default_distance, loss, seed, sound_speed)
+        self.loss_curve = loss_curve  # ((metres, p), ...) or None
+        self.collisions = collisions
+        self._now = now
+        self._tracks = {}
+        self._bursts = []  # (start, end, receiver or None)
+        self._collided = {}  # flight seq -> True (lost at its receiver)
+        self.collided = 0  # copies lost to a collision
+        self.range_lost = 0  # copies lost to the loss curve
+        self.noise_lost = 0  # copies lost in a noise burst
+        self.sent = 0  # packets put on the channel
+
+    # -- geometry ----------------------------------------------------------------
+    def set_position(self, addr, east, north, depth):
+        self._tracks.pop(addr, None)
+        Medium.set_position(self, addr, east, north, depth)
+
+    def set_track(self, addr, track):
+        self._tracks[addr] = track
+
+    def position(self, addr, t=None):
+        tr = self._tracks.get(addr)
+        if tr is not None:
+            return tr.at(self._now if t is None else t)
+        return self._pos.get(addr)
+
+    def offset(self, a, b):
+        pa = self.position(a)
+        pb = self.position(b)
+        if pa is None or pb is None:
+            return None
+        return (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+
+    # -- impairments ---------------------------------------------------------------
+    def noise_burst(self, start, duration_ms, receiver=None):
+        self._bursts.append((start, ticks_add(start, duration_ms), receiver))
+
+    def _in_burst(self, dst, start, end):
+        for s, e, r in self._bursts:
+            if (r is None or r == dst) and ticks_diff(s, end) < 0 and ticks_diff(e, start) > 0:
+                return True
+        return False
+
+    def loss_at(self, metres):
+        # probability that a packet sent over `metres` is lost on the way
+        p = self.loss
+        if self.loss_curve is not None:
+            p = 1 - (1 - p) * (1 - interpolate(self.loss_curve, metres))
+        return p
+
+    # -- the Medium hooks ------------------------------------------------------------
+    def transmit(self, now, src, packet, airtime_ms):
+        self._now = now
+        self.sent += 1
+        return Medium.transmit(self, now, src, packet, airtime_ms)
+
+    def _lost_on_the_way(self, distance):
+        if Medium._lost_on_the_way(self, distance):
+            return True
+        if self.loss_curve is not None and self.rng.chance(interpolate(self.loss_curve, distance)):
+            self.range_lost += 1
+            return True
+        return False
+
+    def distance(self, a, b):
+        d = self._dist.get((a, b) if a < b else (b, a))
+        if d is not None:
+            return d
+        pa = self.position(a)
+        pb = self.position(b)
+        if pa is not None and pb is not None:
+            return _dist(pa, pb)
+        return self.default_distance
+
+    def poll(self, now):
+        self._now = now
+        Medium.poll(self, now)
+        if self._bursts:  # forget bursts long past
+            self._bursts = [b for b in self._bursts if ticks_diff(now, b[1]) < 600000]
+
+    def _lost_on_arrival(self, item):
+        end, seq, dst, _, _, start, _ = item
+        hit = self._collided.pop(seq, False)
+        if self.collisions:
+            for other in self._flight:
+                # every other arrival at this receiver that overlaps this one
+                if other[2] == dst and ticks_diff(other[5], end) < 0 and ticks_diff(other[0], start) > 0:
+                    self._collided[other[1]] = True
+                    hit = True
+        if hit:
+            self.collided += 1
+            return True
+        if self._in_burst(dst, start, end):
+            self.noise_lost += 1
+            return True
+        return False
