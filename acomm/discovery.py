@@ -7,7 +7,7 @@
 # in units of 4 s (1..255, so up to 17 minutes), which tells listeners how
 # long silence may last before the node counts as lost.
 
-from .compat import const, ticks_diff
+from .compat import const, ticks_add, ticks_diff
 from .errors import DecodeError
 from .events import AVAILABLE, UNAVAILABLE, UNKNOWN
 
@@ -44,6 +44,10 @@ class Discovery:
         self._cap = capacity
         self._nodes = {}  # node id -> [last_heard, their period, state]
         self.ignored = 0
+        # no node can be lost before this time (None: nobody to watch); a
+        # lower bound, so poll() scans the table only when something may
+        # be due instead of on every call
+        self._next = None
 
     def heard(self, node_id, now, period_ms=None):
         # Returns AVAILABLE when the node just became available, else None.
@@ -57,6 +61,9 @@ class Discovery:
         e[0] = now
         if period_ms:
             e[1] = period_ms
+        due = ticks_add(now, e[1] * self.lost_after)
+        if self._next is None or ticks_diff(due, self._next) < 0:
+            self._next = due
         if e[2] != AVAILABLE:
             e[2] = AVAILABLE
             return AVAILABLE
@@ -71,14 +78,23 @@ class Discovery:
 
     def poll(self, now):
         # Node ids that just became unavailable.
+        if self._next is None or ticks_diff(now, self._next) < 0:
+            return ()
         lost = None
+        nxt = None
         for k in self._nodes:
             e = self._nodes[k]
-            if e[2] == AVAILABLE and ticks_diff(now, e[0]) >= e[1] * self.lost_after:
+            if e[2] != AVAILABLE:
+                continue
+            left = e[1] * self.lost_after - ticks_diff(now, e[0])
+            if left <= 0:
                 e[2] = UNAVAILABLE
                 if lost is None:
                     lost = []
                 lost.append(k)
+            elif nxt is None or left < nxt:
+                nxt = left
+        self._next = None if nxt is None else ticks_add(now, nxt)
         return lost or ()
 
     def state(self, node_id):

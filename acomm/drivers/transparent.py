@@ -1,6 +1,10 @@
-# Driver for a transparent byte pipe: a serial cable, or a half-duplex
-# serial radio modem of the MaxStream kind (seed 002) that puts on the air
-# whatever bytes it is given. The pipe has no addressing and no integrity, so
+# Driver for a transparent byte pipe: a serial cable, a half-duplex serial
+# radio modem of the MaxStream kind (seed 002) that puts on the air whatever
+# bytes it is given, or an acoustic packet modem that sends each SLIP frame
+# as one packet (the software-defined modems of seed 004: give air_bitrate,
+# the modem's own framing bytes air_overhead and its fixed cost
+# turnaround_ms, and the airtime model follows the modem instead of the
+# serial line). The pipe has no addressing and no integrity, so
 # the link above sends raw acomm frames (addresses + CRC) and this driver only
 # delimits them with SLIP and models the time the bytes take on the line.
 
@@ -15,19 +19,21 @@ _OUT_CAP = const(1024)
 
 
 class TransparentDriver(SansIO):
-    def __init__(self, baud=9600, mtu=255, turnaround_ms=0, model="transparent serial"):
+    def __init__(self, baud=9600, mtu=255, turnaround_ms=0, model="transparent serial", air_bitrate=None, air_overhead=0):
         SansIO.__init__(self)
         self.baud = baud
         self.mtu = mtu
         self.turnaround_ms = turnaround_ms
+        self.air_bitrate = air_bitrate
+        self.air_overhead = air_overhead
         # 8N1: ten bits on the line per byte
         self.caps = Capabilities(
             manufacturer="generic",
             model=model,
             mtu_tx=mtu,
             mtu_rx=mtu,
-            bitrate=baud * 8 // 10,
-            latency_ms=turnaround_ms + (mtu * 10 * 1000) // baud // 2,
+            bitrate=air_bitrate or baud * 8 // 10,
+            latency_ms=self.airtime_ms(mtu // 2),
             flags=CAP_BROADCAST,
         )
         self.broadcast_addr = None
@@ -42,6 +48,8 @@ class TransparentDriver(SansIO):
         self.output_overruns = 0
 
     def airtime_ms(self, nbytes):
+        if self.air_bitrate:
+            return ((nbytes + self.air_overhead) * 8000 + self.air_bitrate - 1) // self.air_bitrate + self.turnaround_ms
         return (nbytes * 10 * 1000 + self.baud - 1) // self.baud + self.turnaround_ms
 
     def ready(self, now):
@@ -58,7 +66,7 @@ class TransparentDriver(SansIO):
         self._out.extend(memoryview(self._slip)[:n])
         self._handle = (self._handle + 1) & 0xFFFF
         self._tx_handle = self._handle
-        self._busy_until = ticks_add(now, self.airtime_ms(n))
+        self._busy_until = ticks_add(now, self.airtime_ms(len(data) if self.air_bitrate else n))
         self.tx_frames += 1
         return self._handle
 
