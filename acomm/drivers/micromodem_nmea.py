@@ -1,0 +1,268 @@
+# NMEA 0183 sentences as the WHOI Micro-Modem speaks them: building them,
+# checking their checksums, cutting a byte stream into sentences, and reading
+# their fields. Shared by the driver (acomm.drivers.micromodem) and the
+# emulator (ports/sim), so both ends agree on the bytes.
+#
+#   $ TALKER SENTENCE , field , field ... * HH CR LF
+#
+# HH is the XOR of every byte between '$' and '*', two uppercase hex digits.
+# Some MM2 firmware sends 8 hex digits instead: the PyPI `acomms` 3.1.0
+# library checks those with a table-driven CRC-32 whose table is that of the
+# reflected polynomial 0xD663B05D (0xBA0DC66B unreflected), initial value
+# 0xFFFFFFFF, final inversion. That is NOT the common (zip/Ethernet) CRC-32,
+# and no WHOI document confirming it was available: the line reader can verify
+# it (the default), accept it unchecked, or refuse such lines (docs say how).
+# Lines from the modem end in CR, LF or both; the host writes CR LF.
+
+from ..compat import const
+from ..crc import nmea_xor
+
+_HEX = b"0123456789ABCDEF"
+
+CSUM32_VERIFY = const(0)
+CSUM32_ACCEPT = const(1)  # trust the line without checking the 8 digits
+CSUM32_REJECT = const(2)
+
+MAX_LINE = const(600)  # a 256-byte rate-5 frame is 512 hex digits + fields
+
+
+def _hex_values():
+    # 0..15 for hex digits (either case), 0xFF for anything else
+    t = bytearray(b"\xff" * 256)
+    for i in range(16):
+        t[_HEX[i]] = i
+    for i in range(6):
+        t[0x61 + i] = 10 + i
+    return t
+
+
+HEXVAL = _hex_values()
+
+
+def crc32(data):
+    # The 8-digit checksum of acomms 3.1.0 (see the header comment). Bitwise:
+    # slow but small, and 8-digit lines are rare.
+    c = 0xFFFFFFFF
+    for b in data:
+        c ^= b
+        for _ in range(8):
+            c = (c >> 1) ^ 0xD663B05D if c & 1 else c >> 1
+    return c ^ 0xFFFFFFFF
+
+
+def hexlify(data):
+    # uppercase hex string of bytes (the modem's data fields)
+    out = bytearray(2 * len(data))
+    j = 0
+    for b in data:
+        out[j] = _HEX[b >> 4]
+        out[j + 1] = _HEX[b & 15]
+        j += 2
+    return out.decode()
+
+
+def sentence(name, *fields):
+    # One line: sentence("CCCYC", 0, 1, 2, 1, 1, 1) -> b"$CCCYC,0,1,2,1,1,1*5B\r\n".
+    # Fields may be str, int or bytes (taken as text).
+    parts = [name]
+    for f in fields:
+        if isinstance(f, (bytes, bytearray)):
+            f = bytes(f).decode()
+        parts.append(str(f))
+    body = ",".join(parts).encode()
+    return b"$" + body + ("*%02X\r\n" % nmea_xor(body)).encode()
+
+
+def sentence32(name, *fields):
+    # As sentence(), with the 8-digit checksum (the emulator can speak it).
+    line = sentence(name, *fields)
+    body = line[1 : line.index(b"*")]
+    return b"$" + body + ("*%08X\r\n" % crc32(body)).encode()
+
+
+def _hexnum(buf, i, j):
+    v = 0
+    for k in range(i, j):
+        d = HEXVAL[buf[k]]
+        if d == 0xFF:
+            return -1
+        v = (v << 4) | d
+    return v
+
+
+# Kinds of damaged input the LineReader counts (keys of its junk dict).
+JUNK_TEXT = "text"  # characters outside a sentence (noise, boot text)
+JUNK_TRUNCATED = "truncated"  # a new '$' before the line ended
+JUNK_OVERLONG = "overlong"  # longer than the buffer: dropped
+JUNK_CHECKSUM = "checksum"  # the checksum does not match
+JUNK_FORMAT = "format"  # no checksum, or not 2/8 hex digits, or no name
+
+
+class LineReader:
+    # Cuts the stream into '$' sentences; each good one goes to
+    # sink.on_sentence(buf, n) with buf[:n] the text between '$' and '*'
+    # (valid until the next feed). Damaged lines are dropped, counted in
+    # self.junk and reported to sink.on_junk(kind). One preallocated buffer;
+    # nothing is allocated per byte.
+    def __init__(self, sink, cap=MAX_LINE, csum32=CSUM32_VERIFY, need_checksum=True):
+        self._sink = sink
+        self._buf = bytearray(cap)
+        self._n = 0
+        self._in = False
+        self._over = False
+        self._text = 0
+        self.csum32 = csum32
+        self.need_checksum = need_checksum
+        self.sentences = 0
+        self.junk = {}
+
+    def reset(self):
+        self._n = 0
+        self._in = False
+        self._over = False
+        self._text = 0
+
+    def _junk(self, kind):
+        self.junk[kind] = self.junk.get(kind, 0) + 1
+        self._sink.on_junk(kind)
+
+    def feed(self, data):
+        buf = self._buf
+        cap = len(buf)
+        n = self._n
+        for b in data:
+            if b == 0x24:  # '$'
+                if self._in:
+                    self._junk(JUNK_TRUNCATED)
+                elif self._text:
+                    self._junk(JUNK_TEXT)
+                self._in = True
+                self._over = False
+                self._text = 0
+                n = 0
+            elif b == 13 or b == 10:
+                if self._in:
+                    self._in = False
+                    self._n = n
+                    self._end()
+                    n = 0
+                elif self._text:
+                    self._text = 0
+                    self._junk(JUNK_TEXT)
+            elif self._in:
+                if n < cap:
+                    buf[n] = b
+                    n += 1
+                else:
+                    self._over = True
+            else:
+                self._text += 1
+        self._n = n
+
+    def _end(self):
+        if self._over:
+            self._over = False
+            self._junk(JUNK_OVERLONG)
+            return
+        buf = self._buf
+        n = self._n
+        star = -1
+        for i in range(n - 1, -1, -1):
+            if buf[i] == 0x2A:  # '*'
+                star = i
+                break
+        if star < 0:
+            if self.need_checksum or n == 0:
+                self._junk(JUNK_FORMAT)
+                return
+            star = n
+        else:
+            digits = n - star - 1
+            if digits == 2:
+                want = _hexnum(buf, star + 1, n)
+                if want < 0:
+                    self._junk(JUNK_FORMAT)
+                    return
+                if want != nmea_xor(memoryview(buf)[:star]):
+                    self._junk(JUNK_CHECKSUM)
+                    return
+            elif digits == 8:
+                if self.csum32 == CSUM32_REJECT:
+                    self._junk(JUNK_FORMAT)
+                    return
+                want = _hexnum(buf, star + 1, n)
+                if want < 0:
+                    self._junk(JUNK_FORMAT)
+                    return
+                if self.csum32 == CSUM32_VERIFY and want != crc32(memoryview(buf)[:star]):
+                    self._junk(JUNK_CHECKSUM)
+                    return
+            else:
+                self._junk(JUNK_FORMAT)
+                return
+        if star < 5:  # not even a talker and a sentence name
+            self._junk(JUNK_FORMAT)
+            return
+        self.sentences += 1
+        self._sink.on_sentence(buf, star)
+
+
+# -- fields --------------------------------------------------------------------
+def fields(buf, n):
+    # [b"CACYC", b"0", b"1", ...] for the text of one sentence
+    return bytes(memoryview(buf)[:n]).split(b",")
+
+
+def num(f, lo=None, hi=None):
+    # A decimal integer field, or None when it is not one (or out of range).
+    n = len(f)
+    if n == 0 or n > 9:
+        return None
+    i = 1 if f[0] == 0x2D else 0  # '-'
+    if i == n:
+        return None
+    v = 0
+    for k in range(i, n):
+        d = f[k] - 0x30
+        if not 0 <= d <= 9:
+            return None
+        v = v * 10 + d
+    if i:
+        v = -v
+    if (lo is not None and v < lo) or (hi is not None and v > hi):
+        return None
+    return v
+
+
+def real(f):
+    # A decimal number field as a float, or None.
+    if not 0 < len(f) <= 20:
+        return None
+    for b in f:
+        if not (0x30 <= b <= 0x39 or b in b"+-.eE"):
+            return None
+    try:
+        return float(f.decode())
+    except ValueError:
+        return None
+
+
+def unhex(f):
+    # The bytes of a hex data field, or None when it is not even-length hex.
+    n = len(f)
+    if n & 1:
+        return None
+    out = bytearray(n >> 1)
+    for i in range(0, n, 2):
+        hi = HEXVAL[f[i]]
+        lo = HEXVAL[f[i + 1]]
+        if hi == 0xFF or lo == 0xFF:
+            return None
+        out[i >> 1] = (hi << 4) | lo
+    return bytes(out)
+
+
+def hhmmss(ms):
+    # Time of day in the modem's HHMMSS form from milliseconds since midnight.
+    s = (ms // 1000) % 86400
+    return "%02d%02d%02d" % (s // 3600, (s // 60) % 60, s % 60)
