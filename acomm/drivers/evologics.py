@@ -1,0 +1,543 @@
+# Driver for EvoLogics S2C acoustic modems over their AT command interface in
+# command/NET mode (serial or a TCP socket: the driver only sees bytes).
+# Sans-IO: bytes and time in, bytes and events out (interface in
+# acomm.drivers). docs/drivers-evologics.md says what goes on the wire and
+# how the modem's answers map to acomm statuses.
+#
+# Two things are tracked apart, as in the SeaTrac driver:
+#   the command slot   one AT command awaiting its reply (OK, ERROR, BUSY or
+#                      a value), or timed out; the modem answers at once;
+#   the acoustic slot  one IM, burst or ping from the moment the link hands
+#                      it over until the modem's final notification.
+# Notifications (RECV*, DELIVERED*, FAILED*, SEND*, ...) are told from
+# replies by their keyword, so they may arrive at any time.
+
+from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from ..compat import const, ticks_add, ticks_diff
+from ..errors import AcommError, EncodeError
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
+from . import evologics_wire as w
+from .base import SansIO
+from .evologics_config import EvologicsConfig
+from .evologics_slot import AIR, CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING, KIND_NAMES, PTIME, QUEUED, AcousticSlot
+
+_S_START = const(0)
+_S_CONFIG = const(1)  # (re)configuring; also "down" while the modem is silent
+_S_UP = const(2)
+
+# command slot contents (the configuration steps use 1..7)
+C_SEND = const(20)
+C_PTIME = const(21)
+C_PROBE = const(22)
+C_CTRL = const(23)
+
+# notifications: keywords that are never a reply
+_NOTES = (
+    b"RECVSTART",
+    b"RECVEND",
+    b"RECVFAILED",
+    b"RECVSRV",
+    b"BITRATE",
+    b"SRCLEVEL",
+    b"PHYON",
+    b"PHYOFF",
+    b"STATUS",
+    b"RADDR",
+    b"DROPCNT",
+    b"ECLK",
+    b"RTO",
+    b"USBLPHYD",
+    b"USBLPHYP",
+    b"EXPIREDIMS",
+    b"CANCELEDIMS",
+    b"CANCELEDPBM",
+    b"SENDSTART",
+)
+_RECV = (b"RECVIM", b"RECV", b"RECVIMS", b"RECVPBM")
+
+
+class EvologicsDriver(SansIO):
+    R_OK = 1
+    R_ERROR = 2
+    R_BUSY = 3
+    R_VALUE = 4
+
+    def __init__(
+        self,
+        address=None,
+        eol=b"\n",
+        burst_mtu=w.BURST_MAX,
+        broadcast_addr=255,
+        im_bitrate=976,
+        burst_bitrate=5000,
+        packet_ms=150,
+        turnaround_ms=100,
+        max_range_m=2000,
+        sound_speed=1500,
+        margin_ms=2000,
+        im_tries=1,
+        cmd_timeout_ms=5000,
+        busy_backoff_ms=1000,
+        take_control=True,
+        check_mode=True,
+        notifications=True,
+        extra_commands=(),
+        firmware16=False,
+        pid=None,
+        ping_payload=b"\x30",
+        ptime_after_ack=True,
+        boot_marks=(b"EvoLogics", b"S2C"),
+        alive_period_ms=60000,
+        rx_gap_ms=500,
+        retry_ms=2000,
+        down_after=3,
+    ):
+        SansIO.__init__(self)
+        if address is not None and not 0 <= address <= 254:
+            raise AcommError("EvoLogics addresses are 0..254, not %r" % (address,))
+        if not 0 <= burst_mtu <= w.BURST_MAX or burst_mtu and burst_mtu <= w.IM_MAX:
+            raise AcommError("burst_mtu must be 0 (off) or %d..%d" % (w.IM_MAX + 1, w.BURST_MAX))
+        if not 1 <= len(ping_payload) <= w.IM_MAX:
+            raise AcommError("ping_payload must be 1..64 bytes")
+        self.eol = eol
+        self.burst_mtu = burst_mtu
+        self.broadcast_addr = broadcast_addr
+        self.im_bitrate = im_bitrate
+        self.burst_bitrate = burst_bitrate
+        self.packet_ms = packet_ms
+        self.turnaround_ms = turnaround_ms
+        self.max_range_m = max_range_m
+        self.sound_speed = sound_speed  # replaced by the modem's AT?CA
+        self.margin_ms = margin_ms
+        self.im_tries = im_tries
+        self.cmd_timeout_ms = cmd_timeout_ms
+        self.busy_backoff_ms = busy_backoff_ms
+        self.pid = pid
+        self.ping_payload = ping_payload
+        self.ptime_after_ack = ptime_after_ack
+        self.boot_marks = boot_marks
+        self.alive_period_ms = alive_period_ms
+        self.rx_gap_ms = rx_gap_ms
+        self.down_after = down_after
+        mtu = burst_mtu if burst_mtu else w.IM_MAX
+        self.caps = Capabilities(
+            manufacturer="EvoLogics",
+            model="S2C",
+            mtu_tx=mtu,
+            mtu_rx=mtu,
+            bitrate=burst_bitrate if burst_mtu else im_bitrate,
+            latency_ms=self.airtime_ms(mtu, mtu > w.IM_MAX) + self.reply_window_ms(),
+            flags=CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING,
+        )
+        self.config = EvologicsConfig(self, address, take_control, check_mode, notifications, extra_commands, retry_ms)
+        self.last_ptime_us = None  # propagation time after the latest delivered ack
+        self.last_rx = None  # signal figures of the latest reception
+        self.last_fix = None  # the latest USBLLONG, as a dict
+        self.last_angles = None  # the latest USBLANGLES
+        self.info = {}
+        self.stats = {
+            "cmd_timeouts": 0,
+            "reboots": 0,
+            "stale": 0,  # replies to nothing, notifications about nothing we sent
+            "unknown": 0,  # lines we do not know
+            "malformed": 0,  # known keywords with unusable fields
+            "notes": 0,  # notifications we only count
+            "async_errors": 0,  # ERROR EFAULT / OVERLOAD
+        }
+        self._reader = w.LineReader(self, w.RX_SPECS_16 if firmware16 else w.RX_SPECS, max(mtu, w.IM_MAX))
+        self._now = 0
+        self._rx_at = 0
+        self._state = _S_START
+        self._cmd = 0  # what the command slot waits for, 0 for nothing
+        self._cmd_deadline = 0
+        self._silent = 0  # commands timed out in a row
+        self._heard = None  # when the modem last answered
+        self._probe = False
+        self._ctrl = False  # AT@CTRL due (someone took control)
+        self._ptime = False  # AT?T due for last_ptime_us
+        self._hold_until = None  # no acoustic command before this
+        self._h = 0
+        self.slot = AcousticSlot(self, mtu)
+
+    # -- timing model ------------------------------------------------------
+    def airtime_ms(self, nbytes, burst=False):
+        rate = self.burst_bitrate if burst else self.im_bitrate
+        return self.packet_ms + (nbytes * 8000 + rate - 1) // rate
+
+    def reply_window_ms(self):
+        # from the end of our packet to the end of the remote's ack at the
+        # range limit
+        return 2 * self.max_range_m * 1000 // self.sound_speed + self.turnaround_ms + self.airtime_ms(0)
+
+    # -- the driver interface ----------------------------------------------
+    @property
+    def address(self):
+        return self.config.own_addr
+
+    @property
+    def junk(self):
+        return self._reader.junk
+
+    def ready(self, now):
+        return self._state == _S_UP and self.slot.state == IDLE
+
+    def send(self, now, addr, data, ack=False):
+        if not self.ready(now):
+            raise AcommError("EvoLogics modem not ready")
+        n = len(data)
+        mtu = self.caps.mtu_tx
+        if n > mtu:
+            raise EncodeError("%d bytes exceed the EvoLogics MTU of %d" % (n, mtu))
+        if n == 0:
+            raise EncodeError("EvoLogics messages carry at least one byte")
+        if not isinstance(addr, int) or not 0 <= addr <= 255:
+            raise EncodeError("EvoLogics address %r outside 0..255" % (addr,))
+        if n > w.IM_MAX:
+            kind = K_BURST  # always acknowledged by the modem
+            if addr == self.broadcast_addr:
+                raise EncodeError("burst data (over %d bytes) cannot be broadcast" % w.IM_MAX)
+        elif ack and addr != self.broadcast_addr:
+            kind = K_IM_ACK
+        else:
+            kind = K_IM
+        return self._accept(now, kind, addr, data)
+
+    def ping(self, now, addr):
+        # Never raises (the link calls it without a guard): problems come
+        # back as EV_TX_FAILED for the returned handle.
+        reason = None
+        if not isinstance(addr, int) or not 0 <= addr <= 254 or addr == self.broadcast_addr:
+            reason = "cannot range to address %r" % (addr,)
+        elif not self.ready(now):
+            reason = "EvoLogics modem not ready"
+        if reason is not None:
+            self._h = (self._h + 1) & 0xFFFF
+            self._events.append((EV_TX_FAILED, self._h, reason))
+            return self._h
+        return self._accept(now, K_PING, addr, self.ping_payload)
+
+    def _accept(self, now, kind, addr, data):
+        self._h = (self._h + 1) & 0xFFFF
+        self.slot.accept(self._h, kind, addr, data)
+        self._pump(now)
+        return self._h
+
+    def feed(self, now, data):
+        self._now = now
+        self._rx_at = now
+        self._reader.feed(data)
+        self._pump(now)
+
+    def poll(self, now):
+        self._now = now
+        if self._state == _S_START:
+            self._state = _S_CONFIG
+            self.config.start(now)
+        r = self._reader
+        if r.partial() and ticks_diff(now, self._rx_at) >= self.rx_gap_ms:
+            r.flush()  # a line that never ended
+        if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
+            self._cmd_timed_out(now)
+        if self.slot.poll(now):
+            # it accepted a transmission and then said nothing: it may have
+            # restarted and lost its settings, so set it up again
+            self.refresh(now)
+        self._pump(now)
+
+    # -- writing commands --------------------------------------------------
+    def command(self, now, what, text):
+        self._out.extend(text)
+        self._out.extend(self.eol)
+        self._cmd = what
+        self._cmd_deadline = ticks_add(now, self.cmd_timeout_ms)
+
+    def _pump(self, now):
+        # Starts the next command if the slot is free: configuration first,
+        # then control, the link's frame or ping, the propagation time,
+        # then probes.
+        if self._cmd:
+            return
+        if self._state != _S_UP:
+            if self._state == _S_CONFIG:
+                self.config.pump(now)
+            return
+        slot = self.slot
+        if self._ctrl:
+            self._ctrl = False
+            self.command(now, C_CTRL, b"AT@CTRL")
+            return
+        if slot.state == PTIME:
+            self.command(now, C_PTIME, b"AT?T")
+            return
+        if slot.state == QUEUED and (self._hold_until is None or ticks_diff(now, self._hold_until) >= 0):
+            self._hold_until = None
+            slot.write(self._out)
+            self._out.extend(self.eol)
+            self._cmd = C_SEND
+            self._cmd_deadline = ticks_add(now, self.cmd_timeout_ms)
+            return
+        if self._ptime:
+            self._ptime = False
+            self.command(now, C_PTIME, b"AT?T")
+            return
+        due = self._probe
+        if not due and self.alive_period_ms and self._heard is not None:
+            due = ticks_diff(now, self._heard) >= self.alive_period_ms
+        if due:
+            # the address tells whether the modem forgot its settings
+            self._probe = False
+            self.command(now, C_PROBE, b"AT?AL")
+
+    def _cmd_timed_out(self, now):
+        what = self._cmd
+        self._cmd = 0
+        self.stats["cmd_timeouts"] += 1
+        self._silent += 1
+        if self._state == _S_CONFIG:
+            self.config.failed(now, "no reply to the modem's set-up")
+            return
+        slot = self.slot
+        if what == C_SEND and slot.state == CMD:
+            self._uncertain(now, "no reply to %s" % KIND_NAMES[slot.kind])
+        elif what == C_PTIME and slot.state == PTIME:
+            slot.ranged(None, self.sound_speed)
+        if self._silent >= self.down_after:
+            self.lost(now, "modem not answering")
+        else:
+            self._probe = True
+
+    def _uncertain(self, now, reason):
+        # The command may have been carried out with only its answer lost:
+        # hold the next one until the modem would be idle again.
+        self._hold_until = ticks_add(now, self.slot.busy_ms())
+        self.slot.fail(reason)
+
+    # -- state changes -----------------------------------------------------
+    def configured(self, now):
+        self._state = _S_UP
+        self._silent = 0
+        self._events.append((EV_DRIVER_UP,))
+
+    def address_known(self, now, prev, addr):
+        pass  # hook for the configuration; the address lives there
+
+    def lost(self, now, reason):
+        # The modem rebooted, fell silent or the connection to it was lost
+        # (a transport may call this): whatever it was doing is gone.
+        if self._state == _S_UP:
+            self._events.append((EV_DRIVER_DOWN, reason))
+            self.config.down_reported = True
+        self._restart(now, reason)
+
+    def refresh(self, now):
+        # Set the modem up again without saying it is down.
+        if self._state == _S_UP:
+            self._restart(now, None)
+
+    def _restart(self, now, reason):
+        if self.slot.state != IDLE and reason is not None:
+            self.slot.fail(reason)
+        elif self.slot.state not in (IDLE, QUEUED):
+            self.slot.fail("modem set up again")
+        self._hold_until = None
+        self._cmd = 0
+        self._probe = False
+        self._ctrl = False
+        self._ptime = False
+        self._reader.reset()
+        self._state = _S_CONFIG
+        self.config.start(now)
+
+    # -- lines from the modem (LineReader sink) ----------------------------
+    def on_junk(self, kind):
+        pass  # counted by the reader; the request in flight has a watchdog
+
+    def on_line(self, r):
+        now = self._now
+        n = r.n
+        if n == 0:
+            return
+        for k in _RECV:
+            if r.is_word(k):
+                self._recv(now, r, k)
+                return
+        if r.is_word(b"DELIVEREDIM") or r.is_word(b"FAILEDIM") or r.is_word(b"CANCELEDIM"):
+            self._im_outcome(r)
+            return
+        if r.is_word(b"DELIVERED") or r.is_word(b"FAILED"):
+            self._burst_outcome(r)
+            return
+        if r.is_word(b"SENDEND"):
+            self._send_end(r)
+            return
+        if r.is_word(b"USBLLONG") or r.is_word(b"USBLANGLES"):
+            self._usbl(r)
+            return
+        for k in _NOTES:
+            if r.is_word(k):
+                self.stats["notes"] += 1
+                return
+        if r.starts(b"ERROR EFAULT") or r.starts(b"ERROR OVERLOAD"):
+            self.stats["async_errors"] += 1  # not replies (evins treats them so)
+            return
+        kind = self.R_VALUE
+        if r.is_word(b"OK") or r.is_word(b"[*]OK"):
+            kind = self.R_OK
+        elif r.starts(b"ERROR"):
+            kind = self.R_ERROR
+        elif r.starts(b"BUSY"):
+            kind = self.R_BUSY
+        if self._cmd:
+            self._reply(now, r, kind)
+        elif kind == self.R_VALUE and self._boot_text(r):
+            self.stats["reboots"] += 1
+            self.lost(now, "modem rebooted")
+        elif kind == self.R_VALUE:
+            self.stats["unknown"] += 1
+        else:
+            self.stats["stale"] += 1
+
+    def _boot_text(self, r):
+        t = r.text()
+        for m in self.boot_marks:
+            if m in t:
+                return True
+        return False
+
+    def _reply(self, now, r, kind):
+        what = self._cmd
+        self._cmd = 0
+        self._heard = now
+        self._silent = 0
+        if kind == self.R_ERROR and r.starts(b"ERROR NO CONTROL") and self.config.take_control:
+            self._ctrl = True  # another client took the modem: take it back
+        if kind == self.R_VALUE and self._boot_text(r):
+            # power-up text where a reply was due
+            self.stats["reboots"] += 1
+            self.lost(now, "modem rebooted")
+            return
+        if self._state == _S_CONFIG:
+            self.config.reply(now, what, r, kind)
+            return
+        slot = self.slot
+        if what == C_SEND:
+            if slot.state != CMD:
+                self.stats["stale"] += 1
+            elif kind == self.R_OK:
+                slot.accepted(now)
+            elif kind == self.R_ERROR or kind == self.R_BUSY:
+                if kind == self.R_BUSY:
+                    self._hold_until = ticks_add(now, self.busy_backoff_ms)
+                slot.refused(_text(r))
+            else:
+                self.stats["malformed"] += 1
+                self._uncertain(now, "garbled reply to %s" % KIND_NAMES[slot.kind])
+        elif what == C_PTIME:
+            us = r.int_field(0) if kind == self.R_VALUE and r.nc == 0 else None
+            if us is not None and us < 0:
+                us = None
+            if us is not None:
+                self.last_ptime_us = us
+            if slot.state == PTIME:
+                slot.ranged(us, self.sound_speed)
+        elif what == C_PROBE:
+            a = r.int_field(0) if kind == self.R_VALUE and r.nc == 0 else None
+            own = self.config.own_addr
+            if a is not None and own is not None and a != own:
+                # a restart put back the address saved in the modem
+                self.stats["reboots"] += 1
+                self.lost(now, "modem rebooted")
+
+    # -- notifications -------------------------------------------------------
+    def _recv(self, now, r, k):
+        data = r.data()
+        li = 1
+        f1 = r.field(1)
+        if f1 and f1[0] == 112:  # p<pid>
+            li = 2
+        src = r.int_field(li + 1)
+        dst = r.int_field(li + 2)
+        if data is None or src is None or dst is None or not 0 <= src <= 255 or not 0 <= dst <= 255:
+            self.stats["malformed"] += 1
+            return
+        if k == b"RECVIM":
+            flag = r.field(li + 3)
+            base = li + 4
+            if self._reader.specs is w.RX_SPECS_16:
+                rssi, integ, vel = r.int_field(base + 1), r.int_field(base + 2), r.float_field(base + 4)
+            else:
+                rssi, integ, vel = r.int_field(base + 1), r.int_field(base + 2), r.float_field(base + 3)
+            own = self.config.own_addr
+            if flag == b"ack" and own is not None and dst == own:
+                # our modem acknowledges by itself: it is busy meanwhile
+                self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
+        elif k == b"RECV":
+            rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 7)
+        elif k == b"RECVIMS":
+            rssi, integ, vel = r.int_field(li + 5), r.int_field(li + 6), r.float_field(li + 7)
+        else:
+            rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 6)
+        self.last_rx = {"src": src, "rssi": rssi, "integrity": integ, "velocity": vel}
+        self._events.append((EV_RX, src, dst, data))
+
+    def _im_outcome(self, r):
+        dst = r.int_field(1)
+        slot = self.slot
+        if dst is None or not slot.awaiting((K_IM_ACK, K_PING), dst):
+            self.stats["stale"] += 1
+            return
+        if r.is_word(b"DELIVEREDIM"):
+            if slot.kind == K_IM_ACK and self.ptime_after_ack:
+                self._ptime = True
+            slot.delivered()
+        else:
+            slot.undelivered(_text(r).split(",")[0])
+
+    def _burst_outcome(self, r):
+        dst = r.int_field(2)
+        slot = self.slot
+        if dst is None or not slot.awaiting((K_BURST,), dst):
+            self.stats["stale"] += 1
+            return
+        if r.is_word(b"DELIVERED"):
+            slot.delivered()
+        else:
+            slot.undelivered("FAILED")
+
+    def _send_end(self, r):
+        addr = r.int_field(1)
+        if addr is not None and self.slot.awaiting((K_IM, K_IM_ACK, K_BURST, K_PING), addr):
+            self.slot.send_end()
+        else:
+            self.stats["stale"] += 1
+
+    def _usbl(self, r):
+        if r.is_word(b"USBLLONG"):
+            names = ("ctime", "mtime", "addr", "x", "y", "z", "east", "north", "up", "roll", "pitch", "yaw",
+                     "ptime", "rssi", "integrity", "accuracy")
+        else:
+            names = ("ctime", "mtime", "addr", "lbearing", "lelevation", "bearing", "elevation", "roll", "pitch",
+                     "yaw", "rssi", "integrity", "accuracy")
+        if r.nc != len(names):
+            self.stats["malformed"] += 1
+            return
+        d = {}
+        for i in range(len(names)):
+            v = r.float_field(i + 1)
+            if v is None:
+                self.stats["malformed"] += 1
+                return
+            d[names[i]] = v
+        d["addr"] = int(d["addr"])
+        if r.is_word(b"USBLLONG"):
+            self.last_fix = d
+        else:
+            self.last_angles = d
+
+
+def _text(r):
+    t = r.text()
+    try:
+        return t.decode()
+    except Exception:  # noqa: BLE001 - binary junk in a reply
+        return repr(t)

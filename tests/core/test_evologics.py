@@ -1,0 +1,420 @@
+# The EvoLogics S2C driver and its emulator: byte-exact against the example
+# exchange of ref/modem-protocols.md section 2.6, the line reader on binary
+# payloads, then two Nodes whose Links drive EvologicsDrivers over FakeUART
+# lines to emulated modems on one acoustic medium, through every fault mode.
+from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
+from acomm.clock import ManualClock
+from acomm.compat import TICKS_MAX
+from acomm.drivers import evologics_wire as w
+from acomm.drivers.evologics import EvologicsDriver
+from acomm.errors import EncodeError
+from acomm.events import (
+    DELIVERED,
+    EV_DELIVERED,
+    EV_DRIVER_DOWN,
+    EV_DRIVER_UP,
+    EV_RANGE,
+    EV_RANGE_RECEIVED,
+    EV_RECEIVED,
+    EV_RX,
+    EV_TX_DONE,
+    EV_TX_FAILED,
+    FAILED,
+    QUEUED,
+    TRANSMITTED,
+    TRANSMITTING,
+    WAITING,
+)
+from acomm.fakeuart import uart_pair
+from acomm.link import BROADCAST
+from acomm.names import AddressMap
+from acomm.node import Node
+from acomm_sim.evologics import EvologicsEmulator
+from acomm_sim.medium import Medium
+from checks import raises
+from linkcheck import Recorder, check_exactly_one_final
+
+# section 2.6, command/NET mode
+SENDIM = b"AT*SENDIM,5,2,ack,hello\n"
+OK = b"OK\r\n"
+DELIVEREDIM = b"DELIVEREDIM,2\r\n"
+PTIME = b"AT?T\n"
+PTIME_100M = b"66667\r\n"
+RECVIM = b"RECVIM,5,1,2,ack,191000,-45,180,0.00,hello\r\n"
+
+
+# -- the line reader ------------------------------------------------------------
+class Sink:
+    def __init__(self):
+        self.lines = []
+        self.junk = []
+
+    def on_line(self, r):
+        self.lines.append((r.text() if r.data_at < 0 else bytes(r.buf[: r.data_at]), r.data()))
+
+    def on_junk(self, kind):
+        self.junk.append(kind)
+
+
+def test_reader_cuts_text_and_length_delimited_payloads():
+    s = Sink()
+    r = w.LineReader(s, w.RX_SPECS)
+    r.feed(b"OK\r\nDELIVEREDIM,2\nFAILEDIM,3\r\r\n")
+    # a payload holding CR LF and commas, fed a byte at a time
+    for b in b"RECVIM,6,1,2,noack,1,-45,180,0.00,a\r\n,b\x00\r\nRECV,p7,2,3,4,9,-50,170,66667,0.10,zz\r\n":
+        r.feed(bytes((b,)))
+    assert s.lines == [
+        (b"OK", None),
+        (b"DELIVEREDIM,2", None),
+        (b"FAILEDIM,3", None),
+        (b"RECVIM,6,1,2,noack,1,-45,180,0.00,", b"a\r\n,b\x00"),
+        (b"RECV,p7,2,3,4,9,-50,170,66667,0.10,", b"zz"),
+    ]
+    assert s.junk == [] and r.lines == 5
+    # an empty payload, and the 1.6 layout (one more field before the data)
+    s16 = Sink()
+    r16 = w.LineReader(s16, w.RX_SPECS_16)
+    r16.feed(b"RECVIM,2,1,2,ack,976,-45,180,66667,0.00,hi\r\nRECVPBM,0,1,2,1,-45,180,0.00,\r\n")
+    assert s16.lines == [(b"RECVIM,2,1,2,ack,976,-45,180,66667,0.00,", b"hi"), (b"RECVPBM,0,1,2,1,-45,180,0.00,", b"")]
+
+
+def test_reader_drops_damage_and_resynchronises():
+    s = Sink()
+    r = w.LineReader(s, w.RX_SPECS, max_data=64)
+    # the declared length is too long: the lines inside the "payload" are
+    # read again after the first terminator in it
+    r.feed(b"RECVIM,9,1,2,ack,1,-45,180,0.00,abc\r\nOK\r\nDELIVEREDIM,2\r\n")
+    assert s.lines == [(b"OK", None), (b"DELIVEREDIM,2", None)] and s.junk == [w.JUNK_LENGTH]
+    s.lines[:] = []
+    r.feed(b"RECVIM,xx,1,2,ack,1,2,3,4,data\r\nOK\r\n")  # not a length
+    r.feed(b"RECV,65,1,2,3,4,5,6,7," + bytes(65) + b"\r\nOK\r\n")  # over max_data
+    r.feed(b"X" * 200 + b"\r\nOK\r\n")  # longer than any text line
+    r.feed(b"RECVIM,4,1,2,a\r\nOK\r\n")  # header cut short: a text line
+    assert s.junk == [w.JUNK_LENGTH, w.JUNK_BAD_LEN, w.JUNK_BAD_LEN, w.JUNK_OVERLONG]
+    assert s.lines == [(b"OK", None)] * 3 + [(b"RECVIM,4,1,2,a", None), (b"OK", None)]
+    # a payload cut off by silence: the owner flushes it after a gap
+    s.lines[:] = []
+    r.feed(b"RECVIM,20,1,2,ack,1,-45,180,0.00,short\r\nOK\r\n")
+    assert s.lines == [] and r.partial()
+    r.flush()
+    assert s.lines == [(b"OK", None)] and s.junk[-1] == w.JUNK_CUT and not r.partial()
+
+
+# -- byte-exact: the driver -----------------------------------------------------
+def up_driver(address=None, **opts):
+    d = EvologicsDriver(address, **opts)
+    d.poll(0)
+    assert d.take_output() == b"AT@CTRL\n"
+    d.feed(1, OK)
+    assert d.take_output() == b"AT?MODE\n"
+    d.feed(2, b"NET\r\n")
+    assert d.take_output() == b"AT?AL\n"
+    d.feed(3, b"1\r\n")
+    if address is not None and address != 1:
+        assert d.take_output() == b"AT!AL%d\n" % address
+        d.feed(4, OK)
+        assert d.take_output() == b"AT?AL\n"
+        d.feed(5, b"%d\r\n" % address)
+    assert d.take_output() == b"AT?CA\n"
+    d.feed(6, b"1500\r\n")
+    assert d.take_output() == b"AT@ZX1\n"
+    d.feed(7, OK)
+    assert d.take_output() == b""
+    assert d.take_events() == [(EV_DRIVER_UP,)]
+    assert d.ready(7) and d.address == (address if address is not None else 1)
+    return d
+
+
+def test_driver_start_sets_the_modem_up():
+    d = up_driver()
+    c = d.caps
+    assert (c.manufacturer, c.model, c.mtu_tx, c.bitrate) == ("EvoLogics", "S2C", 1024, 5000)
+    assert c.flags == CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING
+    assert d.broadcast_addr == 255 and d.config.zx and d.sound_speed == 1500
+    d = up_driver(7)
+    assert d.address == 7
+    d = EvologicsDriver(burst_mtu=0, take_control=False, check_mode=False, extra_commands=(b"AT!L2",))
+    assert d.caps.mtu_tx == 64 and d.caps.bitrate == 976
+    d.poll(0)
+    assert d.take_output() == b"AT?AL\n"
+    d.feed(1, b"3\r\n")
+    d.feed(2, b"1450\r\n")
+    d.feed(3, b"ERROR WRONG FORMAT\r\n")  # no @ZX: the airtime model ends sends
+    assert d.take_output() == b"AT?CA\nAT@ZX1\nAT!L2\n"
+    d.feed(4, OK)
+    assert d.take_events() == [(EV_DRIVER_UP,)] and not d.config.zx and d.sound_speed == 1450
+    # a modem in AT mode is refused
+    d = EvologicsDriver(take_control=False)
+    d.poll(0)
+    d.feed(1, b"AT\r\n")
+    assert not d.ready(1) and "NET" in d.config.problem
+
+
+def test_driver_im_with_ack_matches_reference():
+    d = up_driver()
+    h = d.send(10, 2, b"hello", True)
+    assert d.take_output() == SENDIM
+    assert not d.ready(10)
+    d.feed(20, OK + b"SENDSTART,2,im,191000,0\r\n")
+    d.feed(220, b"SENDEND,2,im,220000,191000\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h)]
+    d.feed(600, DELIVEREDIM)
+    assert d.take_events() == [(EV_DELIVERED, h)]
+    assert d.take_output() == PTIME  # the propagation time after every ack
+    d.feed(610, PTIME_100M)
+    assert d.last_ptime_us == 66667 and d.ready(610)
+    # FAILEDIM: the packet went out, nobody confirmed it
+    h = d.send(700, 2, b"hello", True)
+    d.feed(710, OK)
+    d.feed(3000, b"FAILEDIM,2\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h), (EV_TX_FAILED, h, "FAILEDIM")]
+    # a broadcast never asks for an ack
+    d.take_output()
+    d.send(3100, 255, b"all", True)
+    assert d.take_output() == b"AT*SENDIM,3,255,noack,all\n"
+
+
+def test_driver_ping_ranges_with_the_propagation_time():
+    d = up_driver()
+    h = d.ping(10, 2)
+    assert d.take_output() == b"AT*SENDIM,1,2,ack,0\n"
+    d.feed(20, OK + b"SENDEND,2,im,1,1\r\n")
+    d.feed(600, DELIVEREDIM)
+    assert d.take_output() == PTIME and d.take_events() == []
+    d.feed(610, PTIME_100M)
+    assert d.take_events() == [(EV_RANGE, h, 2, 100.0, {"ptime_us": 66667, "sound_speed": 1500})]
+    h = d.ping(700, 2)
+    d.feed(710, OK)
+    d.feed(3000, b"FAILEDIM,2\r\n")
+    assert d.take_events() == [(EV_RANGE, h, None, None, {"reason": "FAILEDIM"})]
+    # bad addresses come back as failures, never exceptions
+    h = d.ping(3100, 255)
+    assert d.take_events() == [(EV_TX_FAILED, h, "cannot range to address 255")]
+
+
+def test_driver_receives_every_layout():
+    d = up_driver()
+    d.feed(10, RECVIM)
+    d.feed(11, b"RECVIM,p3,4,2,1,noack,1,-60,150,0.50,a\r\nb\r\n")
+    d.feed(12, b"RECV,70,3,1," + b"976,-50,170,66667,0.10," + bytes(range(70)) + b"\r\n")
+    d.feed(13, b"RECVIMS,2,4,255,123456,1,-45,180,0.00,hi\r\nRECVPBM,2,5,1,1,-45,180,0.00,pb\r\n")
+    assert d.take_events() == [
+        (EV_RX, 1, 2, b"hello"),
+        (EV_RX, 2, 1, b"a\r\nb"),
+        (EV_RX, 3, 1, bytes(range(70))),
+        (EV_RX, 4, 255, b"hi"),
+        (EV_RX, 5, 1, b"pb"),
+    ]
+    assert d.last_rx == {"src": 5, "rssi": -45, "integrity": 180, "velocity": 0.0}
+    d16 = EvologicsDriver(firmware16=True)
+    d16.feed(0, b"RECVIM,2,1,2,noack,976,-47,181,66667,0.25,hi\r\n")
+    assert d16.take_events() == [(EV_RX, 1, 2, b"hi")]
+    assert d16.last_rx == {"src": 1, "rssi": -47, "integrity": 181, "velocity": 0.25}
+    # notifications we only count, USBL fixes, junk
+    d.feed(20, b"RECVSTART\r\nRECVEND,1,2,3,4\r\nBITRATE,local,976\r\nPHYON\r\nSTATUS,a,b\r\n")
+    d.feed(21, b"USBLLONG,1.0,2.0,2,3.0,4.0,5.0,6.0,7.0,8.0,0.1,0.2,0.3,66667,-45,180,0.5\r\n")
+    d.feed(22, b"USBLANGLES,1.0,2.0,2,0.1,0.2,0.3,0.4,0.5,0.6,0.7,-45,180,0.5\r\nHELLO?\r\nOK\r\n")
+    assert d.stats["notes"] == 5 and d.stats["unknown"] == 1 and d.stats["stale"] == 1
+    assert d.last_fix["east"] == 6.0 and d.last_fix["addr"] == 2 and d.last_angles["bearing"] == 0.3
+    assert d.take_events() == []
+
+
+def test_driver_noack_burst_and_refusals():
+    d = up_driver()
+    h = d.send(10, 2, b"x", False)
+    assert d.take_output() == b"AT*SENDIM,1,2,noack,x\n"
+    d.feed(20, OK)
+    assert d.take_events() == [] and not d.ready(20)
+    d.feed(200, b"SENDEND,2,im,1,1\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h)] and d.ready(200)
+    # burst data: always acknowledged by the modem
+    h = d.send(300, 3, bytes(100), False)
+    assert d.take_output() == b"AT*SEND,100,3," + bytes(100) + b"\n"
+    d.feed(310, OK + b"SENDEND,3,burst,1,1\r\nDELIVERED,100,3\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h), (EV_DELIVERED, h)]
+    h = d.send(400, 3, bytes(100), False)
+    d.feed(410, OK + b"FAILED,100,3\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h), (EV_TX_FAILED, h, "FAILED")]
+    # refusals carry the modem's words; BUSY holds the next command back
+    d.take_output()
+    h = d.send(500, 2, b"y", True)
+    d.feed(510, b"BUSY BACKOFF STATE\r\n")
+    assert d.take_events() == [(EV_TX_FAILED, h, "BUSY BACKOFF STATE")] and d.ready(510)
+    d.take_output()
+    h = d.send(520, 2, b"y", True)
+    assert d.take_output() == b""
+    d.poll(510 + 1000)
+    assert d.take_output() == b"AT*SENDIM,1,2,ack,y\n"
+    d.feed(1520, b"ERROR NO CONTROL\r\n")
+    assert d.take_events() == [(EV_TX_FAILED, h, "ERROR NO CONTROL")]
+    assert d.take_output() == b"AT@CTRL\n"  # take the modem back
+    d.feed(1530, OK)
+    # the link's MTU check has a twin here; the address must be a number
+    raises(EncodeError, d.send, 1600, 2, bytes(1025), False)
+    raises(EncodeError, d.send, 1600, 255, bytes(65), False)
+    raises(EncodeError, d.send, 1600, "two", b"x", False)
+    d2 = up_driver(burst_mtu=0)
+    raises(EncodeError, d2.send, 10, 2, bytes(65), False)
+
+
+def test_driver_without_notifications_uses_the_airtime_model():
+    d = up_driver()
+    d.config.zx = False
+    h = d.send(10, 2, b"hello", False)
+    d.feed(20, OK)
+    air = d.airtime_ms(5)
+    assert air == 150 + 41
+    d.poll(20 + air - 1)
+    assert d.take_events() == []
+    d.poll(20 + air)
+    assert d.take_events() == [(EV_TX_DONE, h)] and d.ready(20 + air)
+
+
+def test_driver_timeouts_and_watchdog():
+    d = up_driver()
+    h = d.send(10, 2, b"lost", True)
+    d.take_output()
+    d.poll(10 + 4999)
+    assert d.take_events() == []
+    d.poll(10 + 5000)
+    assert d.take_events() == [(EV_TX_FAILED, h, "no reply to AT*SENDIM")]
+    assert d.ready(5010)
+    assert d.take_output() == b"AT?AL\n"  # is it still there?
+    d.feed(5100, b"1\r\nDELIVEREDIM,2\r\n")  # an outcome that comes after all
+    assert d.stats["stale"] == 1 and d.take_events() == []
+    # accepted, then silence: the watchdog ends it and sets the modem up again
+    d.poll(20000)
+    d.take_output()
+    h = d.send(20000, 2, b"x", True)
+    assert d.take_output() == b"AT*SENDIM,1,2,ack,x\n"
+    d.feed(20010, OK)
+    limit = 20010 + d.airtime_ms(1) + d.reply_window_ms() + d.margin_ms
+    d.poll(limit - 1)
+    assert d.take_events() == []
+    d.poll(limit)
+    assert d.take_events() == [(EV_TX_FAILED, h, "no final word from the modem")]
+    assert d.take_output() == b"AT@CTRL\n" and not d.ready(limit)
+
+
+def test_driver_detects_reboots_and_silence():
+    d = up_driver()
+    h = d.send(10, 2, b"x", True)
+    d.take_output()
+    d.feed(20, OK)
+    d.feed(300, b"EvoLogics S2C modem (acomm emulator)\r\n")
+    assert d.take_events() == [(EV_DRIVER_DOWN, "modem rebooted"), (EV_TX_FAILED, h, "modem rebooted")]
+    assert d.take_output() == b"AT@CTRL\n" and not d.ready(300)
+    for t, line in enumerate((OK, b"NET\r\n", b"1\r\n", b"1500\r\n", OK)):
+        d.feed(400 + t, line)
+    assert d.take_events() == [(EV_DRIVER_UP,)]
+    # the periodic probe finds the address the modem had before we set it
+    d = up_driver(7)
+    d.poll(60007)
+    assert d.take_output() == b"AT?AL\n"
+    d.feed(60010, b"1\r\n")
+    assert d.take_events() == [(EV_DRIVER_DOWN, "modem rebooted")]
+    # a modem that stops answering goes down after three commands
+    d = up_driver()
+    d.poll(60007)
+    for k in range(3):
+        assert d.take_output() == b"AT?AL\n"
+        d.poll(60007 + 5000 * (k + 1))
+    assert d.take_events() == [(EV_DRIVER_DOWN, "modem not answering")]
+    assert d.take_output() == b"AT@CTRL\n"
+
+
+# -- byte-exact: the emulator -----------------------------------------------------
+def run_emulators(emus, t0, t1, step=10):
+    out = [bytearray() for _ in emus]
+    t = t0
+    while t <= t1:
+        for i, e in enumerate(emus):
+            e.poll(t)
+            out[i] += e.take_output()
+        t += step
+    return [bytes(o) for o in out]
+
+
+def test_emulator_answers_like_the_reference():
+    m = Medium(default_distance=100.0)
+    a = EvologicsEmulator(m, 1)
+    b = EvologicsEmulator(m, 2)
+    a.feed(0, b"AT@ZX1\n")
+    assert a.take_output() == OK
+    a.feed(0, SENDIM)
+    assert a.take_output() == OK + b"SENDSTART,2,im,191000,0\r\n"  # no echo
+    out_a, out_b = run_emulators((a, b), 0, 1000)
+    assert out_a == b"SENDEND,2,im,191000,191000\r\n" + DELIVEREDIM
+    assert out_b == RECVIM.replace(b",180,", b",198,")  # integrity from the distance
+    a.feed(1000, PTIME)
+    assert a.take_output() == PTIME_100M
+    # noack: SENDEND ends it; nobody acknowledges
+    a.feed(2000, b"AT*SENDIM,2,2,noack,hi\r\n")
+    assert a.take_output() == OK + b"SENDSTART,2,im,167000,0\r\n"
+    out_a, out_b = run_emulators((a, b), 2000, 3000)
+    assert a.take_output() == b""
+    assert out_a == b"SENDEND,2,im,2167000,167000\r\n"
+    assert out_b == b"RECVIM,2,1,2,noack,167000,-45,198,0.00,hi\r\n"
+
+
+def test_emulator_refuses_and_times_out():
+    m = Medium()
+    a = EvologicsEmulator(m, 1)
+    for cmd, ans in (
+        (b"AT?MODE\r", b"NET"),
+        (b"AT?AL\r\n", b"1"),
+        (b"AT?CA\n", b"1500"),
+        (b"ATI1\n", b"phy:1.7 mac:1.7"),
+        (b"AT!CA1480\n", b"OK"),
+        (b"AT?CA\n", b"1480"),
+        (b"ATX\n", b"ERROR WRONG FORMAT"),
+        (b"hello\n", b"ERROR WRONG FORMAT"),
+        (b"AT*SENDIM,65,2,noack," + bytes(65) + b"\n", b"ERROR BUFFER OVERFLOW"),
+        (b"AT*SENDIM,2,2,maybe,hi\n", b"ERROR WRONG FORMAT"),
+        (b"AT*SENDIM,2,2,ack,hi\n", b"OK"),  # nobody is 2
+        (b"AT*SENDIM,2,2,ack,hi\n", b"BUSY BACKOFF STATE"),
+    ):
+        a.feed(0, cmd)
+        assert a.take_output() == ans + b"\r\n", (cmd, ans)
+    a.feed(400, b"AT*SEND,3,2,abc\n")
+    assert a.take_output() == b"BUSY DELIVERING\r\n"
+    assert run_emulators((a,), 0, 5000)[0] == b"FAILEDIM,2\r\n"
+    a.feed(6000, b"AT*SEND,3,2,abc\n")
+    assert a.take_output() == OK
+    assert run_emulators((a,), 6000, 10000)[0] == b"FAILED,3,2\r\n"
+    # another client took control
+    a.steal_control()
+    a.feed(11000, b"AT?AL\n")
+    assert a.take_output() == b"ERROR NO CONTROL\r\n"
+    a.feed(11000, b"AT@CTRL\nAT!AL9\nAT?AL\n")
+    assert a.take_output() == b"OK\r\nOK\r\n9\r\n"
+    # ATZ0 restarts: the unsaved address is gone, the banner comes
+    a.feed(11000, b"ATZ0\n")
+    assert a.take_output() == OK
+    out = run_emulators((a,), 11000, 12100)[0]
+    assert out.startswith(b"EvoLogics S2C") and a.address == 1
+    a.feed(12100, b"AT!AL4\nAT&W\n")
+    a.reboot(12100)
+    run_emulators((a,), 12100, 13200)
+    assert a.address == 4
+
+
+def test_emulator_at_mode_envelope_and_data():
+    m = Medium(default_distance=150.0)
+    a = EvologicsEmulator(m, 1, mode="AT", remote_addr=2)
+    b = EvologicsEmulator(m, 2, mode="AT", remote_addr=1)
+    a.feed(0, b"+++AT?MODE\r\n+++AT?T\n+++AT:junk\n")
+    assert a.take_output() == b"+++AT?MODE:2:AT\r\n+++AT?T:1:0\r\n+++AT:18:ERROR WRONG FORMAT\r\n"
+    a.feed(10, b"raw ++ bytes+")  # data mode: raw bytes go out as burst data
+    a.feed(11, b"+\n")
+    out_a, out_b = run_emulators((a, b), 10, 3000)
+    assert out_b == b"raw ++ bytes++\n"  # received burst data comes out raw
+    assert out_a == b"+++AT:14:DELIVERED,15,2\r\n"
+    a.feed(3000, b"+++AT*SENDIM,2,2,ack,hi\n")
+    assert a.take_output() == b"+++AT*SENDIM:2:OK\r\n"
+    out_a, out_b = run_emulators((a, b), 3000, 5000)
+    assert out_b == b"+++AT:39:RECVIM,2,1,2,ack,167000,-48,197,0.00,hi\r\n"
+    assert out_a == b"+++AT:13:DELIVEREDIM,2\r\n"
+    a.feed(5000, b"+++ATC\n")
+    a.feed(5000, b"AT?T\n")
+    assert a.take_output() == b"+++ATC:2:OK\r\n100000\r\n"
