@@ -97,6 +97,10 @@ class Discovery:
         self._next = None if nxt is None else ticks_add(now, nxt)
         return lost or ()
 
+    def loss_due(self, now):
+        # whether poll(now) may have a node to declare lost
+        return self._next is not None and ticks_diff(now, self._next) >= 0
+
     def state(self, node_id):
         e = self._nodes.get(node_id)
         return UNKNOWN if e is None else e[2]

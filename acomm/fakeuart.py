@@ -90,8 +90,10 @@ class FakeUART:
         self._rx.extend(data)
 
     def _deliver(self):
-        now = self.clock()
         p = self._pending
+        if not p:
+            return
+        now = self.clock()
         # in order: a later chunk never overtakes an earlier one on a wire
         while p and ticks_diff(p[0][0], now) <= 0:
             self._put(p.pop(0)[1])

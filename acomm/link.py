@@ -315,6 +315,16 @@ class Link:
             self._start_next(now)
             self._handle_driver_events(now)
 
+    def idle(self, now):
+        # True when poll(now) has nothing of its own to do: nothing on the
+        # air or awaited, no link ack owed, no advert or loss due. Queued
+        # requests may still wait (for the driver, or a MAC's turn). The
+        # simulator uses it to step quiet nodes less often.
+        fl = self._fl
+        if fl.state != _IDLE or fl.req is not None or len(self._acks) or self._pending_acks:
+            return False
+        return not (self.discovery.advert_due(now, self._last_tx) or self.discovery.loss_due(now))
+
     def feed(self, now, data):
         self.driver.feed(now, data)
         self._handle_driver_events(now)

@@ -96,6 +96,9 @@ class Aloha:
             self.backoffs += 1
         return ticks_diff(now, u) >= 0
 
+    def next_start(self, now):
+        return now if self._until is None else self._until
+
     def sent(self, now):
         self._until = None  # the next frame draws a new backoff
 

@@ -19,6 +19,7 @@ BENCHES = {
     "queue": "queue_workload",
     "discovery": "discovery_workload",
     "codec": "codec_workload",
+    "sim": "sim_workload",
 }
 
 

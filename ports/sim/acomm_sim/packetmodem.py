@@ -68,6 +68,10 @@ class PacketModemEmulator(SansIO):
             self._tx_until = self.medium.transmit(now, self.address, p, self.airtime_ms(len(p)))
             self.tx_packets += 1
 
+    def idle(self, now):
+        # nothing queued, nothing on the air: poll() would do nothing
+        return not self._queue and not self.transmitting(now)
+
     def transmitting(self, now):
         return self._tx_until is not None and ticks_diff(now, self._tx_until) < 0
 

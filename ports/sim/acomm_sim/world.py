@@ -8,9 +8,15 @@
 #   w.run(60000)                         # one simulated minute
 #   buoy.node.send("acoustic", "diver", b"hi", 60, 2, True)
 #
-# Time advances in steps of step_ms; in each step every node runs once
-# (link timers, queue, driver), bytes cross the serial lines, the emulators
-# run and the channel delivers what has arrived. Modems (MODEMS below) are
+# Time advances in steps of step_ms; in each step every node that has work
+# runs once (link timers, queue, driver), bytes cross the serial lines, the
+# emulators run and the channel delivers what has arrived. A node with
+# nothing to do (Link.idle, driver ready, no bytes waiting, and either an
+# empty queue or a MAC that says "not your turn yet") is stepped only when
+# its turn comes, bytes arrive, or max_quiet_ms has passed (its driver's own
+# slow timers, such as keepalives, may run that much late). When every node
+# sleeps and nothing is on the channel or the lines, the clock jumps to the
+# earliest wake-up. Runs stay deterministic. Modems (MODEMS below) are
 # looked up by name so that any emulated modem can be used; `mac` wraps the
 # node's driver (acomm.mac) to give it a TDMA slot or ALOHA backoff.
 # Portable Python (the core tests run it on MicroPython too).
@@ -95,6 +101,7 @@ class SimNode:
         self.modem_end = modem_end
         self.address = address
         self.events = []
+        self.wake = None  # next step due (None: at the next world step)
 
     @property
     def link(self):
@@ -103,14 +110,18 @@ class SimNode:
 
 
 class World:
-    def __init__(self, seed=1, channel=None, start=0, step_ms=10):
+    def __init__(self, seed=1, channel=None, start=0, step_ms=10, max_quiet_ms=100):
         self.clock = ManualClock(start)
         self.channel = channel if channel is not None else Channel(seed=seed, now=start)
         self.seed = seed
         self.step_ms = step_ms
         self.nodes = {}
         self._order = []
+        self.max_quiet_ms = max_quiet_ms
         self.steps = 0
+        self.node_steps = 0
+        self.node_skips = 0
+        self.jumped_ms = 0
 
     def now(self):
         return self.clock()
@@ -140,11 +151,40 @@ class World:
         self._order.append(sn)
         return sn
 
+    def _quiet_until(self, sn, now):
+        # when this node next needs a step; None means at the next one
+        if sn.host_end.any():
+            return None
+        link = sn.link
+        if not link.idle(now):
+            return None
+        d = link.driver
+        queued = len(link.queue)
+        cap = ticks_add(now, self.max_quiet_ms)
+        if isinstance(d, MacDriver):
+            if not d.driver.ready(now):
+                return None
+            if not queued:
+                return cap
+            if d.mac.may_start(now):
+                return None
+            wake = d.mac.next_start(now)
+            return wake if wake is not None and ticks_diff(wake, cap) < 0 else cap
+        if queued or not d.ready(now):
+            return None
+        return cap
+
     def step(self):
         now = self.clock()
         ch = self.channel
         for sn in self._order:
-            sn.node.step(now)
+            w = sn.wake
+            if w is None or ticks_diff(now, w) >= 0 or sn.host_end.any():
+                sn.node.step(now)
+                sn.wake = self._quiet_until(sn, now)
+                self.node_steps += 1
+            else:
+                self.node_skips += 1
             dev = sn.modem_end
             if dev.any():
                 sn.emu.feed(now, dev.read())
@@ -157,11 +197,45 @@ class World:
         self.clock.advance(self.step_ms)
         self.steps += 1
 
+    def _all_quiet_until(self, now):
+        # When every node sleeps, nothing is on the channel or the lines,
+        # and every emulator says it is idle, nothing can happen before the
+        # earliest wake-up: the clock may jump there. None when it cannot.
+        if self.channel.in_flight():
+            return None
+        first = None
+        for sn in self._order:
+            w = sn.wake
+            if w is None:
+                return None
+            idle = getattr(sn.emu, "idle", None)
+            if idle is None or not idle(now):
+                return None
+            for end in (sn.host_end, sn.modem_end):
+                if end.any() or end.in_flight():
+                    return None
+            if first is None or ticks_diff(w, first) < 0:
+                first = w
+        return first
+
     def run(self, ms, until=None):
         # Runs `ms` of simulated time, or until until() is true (-> True).
         end = ticks_add(self.clock(), ms)
-        while ticks_diff(end, self.clock()) > 0:
+        for sn in self._order:
+            sn.wake = None  # the caller may have given them work
+        clk = self.clock
+        while ticks_diff(end, clk()) > 0:
             self.step()
             if until is not None and until():
                 return True
+            now = clk()
+            w = self._all_quiet_until(now)
+            if w is not None:
+                if ticks_diff(w, end) > 0:
+                    w = end
+                # stay on the grid of steps
+                k = ticks_diff(w, now) // self.step_ms
+                if k > 0:
+                    clk.advance(k * self.step_ms)
+                    self.jumped_ms += k * self.step_ms
         return until is None
