@@ -1,0 +1,434 @@
+# Driver for Teledyne Benthos ATM-9xx acoustic modems (ATM-900 series) over
+# their serial port: the CLAM shell with Hayes AT commands. Sans-IO: bytes
+# and time in, bytes and events out (interface in acomm.drivers).
+# docs/drivers-benthos.md says what goes on the wire and how the modem's
+# answers map to acomm statuses.
+#
+# The modem has two modes. In command mode it takes one command line at a
+# time (ending in CR) and answers with lines and its prompt `user:N>`. In
+# online mode every byte is payload, sent acoustically once the line has
+# been quiet for @FwdDelay. The driver keeps the modem in command mode, goes
+# online only to hand over one frame (ATO, payload), and comes back with
+# the modem's own prompt after the transmission, or with `+++` after a
+# guard time of silence when it does not know the mode (start-up, errors).
+#
+# One command is outstanding at a time; its owner is the start-up sequence
+# (benthos_config), the link's transaction (benthos_slot) or a keepalive.
+
+from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, Capabilities
+from ..compat import const, ticks_add, ticks_diff
+from ..errors import AcommError, EncodeError
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
+from . import benthos_wire as w
+from .base import SansIO
+from .benthos_config import BenthosConfig, setup_steps
+from .benthos_lines import LineSplitter, RxBlock
+from .benthos_slot import IDLE, K_DATA, K_PING, QUEUED, Slot
+
+_S_START = const(0)
+_S_CONFIG = const(1)
+_S_UP = const(2)
+
+M_UNKNOWN = const(0)
+M_COMMAND = const(1)
+M_ONLINE = const(2)
+
+# outstanding commands
+C_ESCAPE = const(1)
+C_AT = const(2)
+C_SET = const(3)
+C_QUERY = const(4)
+C_ATO = const(5)
+C_PAYLOAD = const(6)
+C_RANGE = const(7)
+
+_O_CONFIG = const(0)
+_O_SLOT = const(1)
+_O_PROBE = const(2)
+
+
+class BenthosDriver(SansIO):
+    def __init__(
+        self,
+        address=None,
+        tx_rate=8,
+        mtu=w.DEFAULT_MTU,
+        rx_max=256,
+        fwd_delay_ms=50,
+        rcv_all=True,
+        ac_rsp_tmo_ms=10000,
+        extra_settings=(),
+        packet_ms=500,
+        guard_ms=1300,
+        cmd_timeout_ms=2000,
+        prompt_timeout_ms=2000,
+        range_margin_ms=2000,
+        baud=9600,
+        retry_ms=2000,
+        alive_period_ms=60000,
+        down_after=3,
+        banner_marks=("Teledyne Benthos", "Benthos ATM"),
+    ):
+        SansIO.__init__(self)
+        if tx_rate not in w.RATES:
+            raise AcommError("Benthos @TxRate codes are 2..13, not %r" % (tx_rate,))
+        if not 1 <= mtu <= w.MAX_FRAME:
+            raise AcommError("Benthos frames are 1..%d bytes, not %d" % (w.MAX_FRAME, mtu))
+        if address is not None and not 0 <= address <= w.MAX_ADDR:
+            raise AcommError("Benthos local addresses are 0..249, not %r" % (address,))
+        if ac_rsp_tmo_ms is not None and not 2000 <= ac_rsp_tmo_ms <= 99500:
+            raise AcommError("@AcRspTmOut is 2..99.5 s")
+        self.address = address
+        self.tx_rate = tx_rate
+        self.mtu = mtu
+        self.fwd_delay_ms = fwd_delay_ms
+        self.packet_ms = packet_ms
+        self.guard_ms = guard_ms
+        self.cmd_timeout_ms = cmd_timeout_ms
+        self.prompt_timeout_ms = prompt_timeout_ms
+        # ATR waits for the modem's own timeout (or 10 s when it is left as
+        # it is: an assumption) and a margin
+        self.range_timeout_ms = (ac_rsp_tmo_ms or 10000) + range_margin_ms
+        self.baud = baud
+        self.alive_period_ms = alive_period_ms
+        self.down_after = down_after
+        self.banner_marks = banner_marks
+        self.broadcast_addr = w.BROADCAST
+        rx_max = max(rx_max, mtu)
+        self.caps = Capabilities(
+            manufacturer="Teledyne Benthos",
+            model="ATM-900",
+            mtu_tx=mtu,
+            mtu_rx=rx_max,
+            bitrate=w.RATES[tx_rate],
+            # the frame's commands, forwarding delay and airtime, and about
+            # 1 s of travel (1.5 km)
+            latency_ms=fwd_delay_ms + self.airtime_ms(mtu) + 1000,
+            flags=CAP_ADDRESSING | CAP_BROADCAST | CAP_RANGING,
+        )
+        steps = setup_steps(address, tx_rate, fwd_delay_ms, rcv_all, ac_rsp_tmo_ms, extra_settings)
+        self.config = BenthosConfig(self, steps, retry_ms)
+        self.slot = Slot(self, mtu)
+        self.remote = None  # the @RemoteAddr the modem last confirmed
+        self.last_rx = None  # the receive statistics of the last good packet
+        self.stats = {
+            "cmd_timeouts": 0,
+            "escapes": 0,
+            "reboots": 0,
+            "echo": 0,  # our own command lines echoed back
+            "unexpected": 0,  # well-formed lines that answer nothing
+            "refused": 0,
+        }
+        self.junk = {}
+        self._lines = LineSplitter(2 * rx_max + 32, self)
+        self.rx = RxBlock(rx_max, self)
+        self._state = _S_START
+        self.mode = M_UNKNOWN
+        self._cmd = 0
+        self._owner = _O_CONFIG
+        self._text = ""  # the command line, for echo and messages
+        self._want = None  # (name, value) of a setting or query
+        self._deadline = 0
+        self._written = None  # when we last wrote to the modem
+        self._heard = None
+        self._hold_until = None
+        self._silent = 0
+        self._now = 0
+        self._h = 0
+
+    # -- timing model ------------------------------------------------------------
+    def airtime_ms(self, nbytes):
+        return w.airtime_ms(self.tx_rate, nbytes, self.packet_ms)
+
+    # -- the driver interface ------------------------------------------------------
+    def ready(self, now):
+        return self._state == _S_UP and self.slot.state == IDLE
+
+    def send(self, now, addr, data, ack=False):
+        # ack is ignored: the modem reports no delivery (the link adds its
+        # own acks because the caps lack CAP_RELIABLE)
+        if not self.ready(now):
+            raise AcommError("Benthos modem not ready")
+        n = len(data)
+        if n > self.mtu:
+            raise EncodeError("%d bytes exceed the Benthos MTU of %d" % (n, self.mtu))
+        if n == 0:
+            raise EncodeError("an empty frame cannot be sent in online mode")
+        if not isinstance(addr, int) or not (0 <= addr <= w.MAX_ADDR or addr == w.BROADCAST):
+            raise EncodeError("Benthos address %r outside 0..249 and 255" % (addr,))
+        return self._accept(now, K_DATA, addr, data)
+
+    def ping(self, now, addr):
+        # never raises: problems come back as EV_TX_FAILED for the handle
+        reason = None
+        if not isinstance(addr, int) or not 0 <= addr <= w.MAX_ADDR or addr == self.address:
+            reason = "cannot range address %r" % (addr,)
+        elif not self.ready(now):
+            reason = "Benthos modem not ready"
+        if reason is not None:
+            self._h = (self._h + 1) & 0xFFFF
+            self._events.append((EV_TX_FAILED, self._h, reason))
+            return self._h
+        return self._accept(now, K_PING, addr, b"")
+
+    def _accept(self, now, kind, addr, data):
+        self._h = (self._h + 1) & 0xFFFF
+        self.slot.accept(self._h, kind, addr, data)
+        self._pump(now)
+        return self._h
+
+    def feed(self, now, data):
+        self._now = now
+        self._lines.feed(data)
+        self._pump(now)
+
+    def poll(self, now):
+        self._now = now
+        if self._state == _S_START:
+            self._state = _S_CONFIG
+            self._written = now  # the guard time counts from here
+            self.config.start(now)
+        if self._cmd and ticks_diff(now, self._deadline) >= 0:
+            self._timed_out(now)
+        self.slot.poll(now, self.mode == M_COMMAND)
+        self._pump(now)
+
+    # -- writing -------------------------------------------------------------------
+    def _write(self, now, data):
+        self._out.extend(data)
+        self._written = now
+
+    def _command(self, now, kind, text, timeout_ms=None):
+        self._cmd = kind
+        self._text = text
+        self._deadline = ticks_add(now, timeout_ms if timeout_ms is not None else self.cmd_timeout_ms)
+        self._write(now, text.encode())
+        self._write(now, b"\r")
+
+    def command_at(self, now, text):
+        self._want = None
+        self._command(now, C_AT, text)
+
+    def command_set(self, now, name, value):
+        self._want = (name, value)
+        self._command(now, C_SET, "@%s=%s" % (name, value))
+
+    def command_query(self, now, name):
+        self._want = (name, "")
+        self._command(now, C_QUERY, "@" + name)
+
+    def command_ato(self, now):
+        self._command(now, C_ATO, "ATO")
+
+    def command_range(self, now, addr):
+        self._command(now, C_RANGE, "ATR%d" % addr, self.range_timeout_ms)
+
+    def command_payload(self, now, data):
+        # online now: the bytes go out as they are; the modem answers
+        # after the forwarding delay
+        self.mode = M_ONLINE
+        self._cmd = C_PAYLOAD
+        self._text = ""
+        serial_ms = len(data) * 10000 // self.baud
+        self._deadline = ticks_add(now, self.fwd_delay_ms + serial_ms + self.cmd_timeout_ms)
+        self._write(now, data)
+
+    def hold(self, until):
+        self._hold_until = until
+
+    def resync(self):
+        # the modem's mode is not known: `+++` before the next command
+        self.mode = M_UNKNOWN
+
+    def _pump(self, now):
+        # the next command, if the serial line is free: the escape when the
+        # mode is unknown, then the start-up sequence, the link's
+        # transaction, or a keepalive
+        if self._cmd:
+            return
+        if self._hold_until is not None:
+            if ticks_diff(now, self._hold_until) < 0:
+                return
+            self._hold_until = None
+        if self._state == _S_START:
+            return
+        up = self._state == _S_UP
+        self._owner = _O_CONFIG
+        if up:
+            st = self.slot.state
+            if st == QUEUED:
+                self._owner = _O_SLOT
+            elif st == IDLE:
+                # keep the modem in command mode between transmissions, and
+                # check now and then that it is still there (an escape is
+                # harmless in either mode)
+                if self.alive_period_ms and ticks_diff(now, self._written) >= self.alive_period_ms:
+                    self.mode = M_UNKNOWN
+                if self.mode == M_COMMAND:
+                    return
+                self._owner = _O_PROBE
+            else:
+                return
+        if self.mode != M_COMMAND:
+            if ticks_diff(now, self._written) >= self.guard_ms:
+                self.stats["escapes"] += 1
+                self._want = None
+                self._command(now, C_ESCAPE, "+++")
+            return
+        if up:
+            self.slot.start(now)
+        elif self._state == _S_CONFIG:
+            self.config.pump(now)
+
+    # -- outcomes of commands ----------------------------------------------------------
+    def _finish(self, now, ok, detail):
+        kind = self._cmd
+        self._cmd = 0
+        if not ok:
+            self.stats["refused"] += 1
+        if kind == C_ESCAPE:
+            self.mode = M_COMMAND
+            if self._owner == _O_PROBE:
+                return
+        if self._owner == _O_SLOT:
+            if kind != C_ESCAPE:
+                self.slot.reply(now, ok, detail)
+        elif self._owner == _O_CONFIG and kind != C_ESCAPE:
+            self.config.reply(now, ok, detail)
+
+    def _timed_out(self, now):
+        kind = self._cmd
+        self.stats["cmd_timeouts"] += 1
+        self._silent += 1
+        if kind == C_ESCAPE:
+            # a modem whose prompt is not (yet) `user:N>` escapes silently:
+            # carry on, the next command tells
+            self._finish(now, True, "")
+        else:
+            what = {C_ATO: "no CONNECT", C_PAYLOAD: "no " + w.FWD_UP}.get(kind)
+            self.mode = M_UNKNOWN
+            self._finish(now, False, what or "no reply to %s" % self._text)
+        if self._silent >= self.down_after and self._state == _S_UP:
+            self.lost(now, "modem not answering")
+
+    # -- state changes -------------------------------------------------------------------
+    def configured(self, now):
+        self._state = _S_UP
+        self._silent = 0
+        self.remote = None
+        self._events.append((EV_DRIVER_UP,))
+
+    def lost(self, now, reason):
+        # The modem restarted or fell silent: whatever it was doing is gone.
+        if self._state == _S_UP:
+            self._events.append((EV_DRIVER_DOWN, reason))
+            self.config.down_reported = True
+        self.slot.lost(reason)
+        self._cmd = 0
+        self._silent = 0
+        self._hold_until = None
+        self.remote = None
+        self.mode = M_UNKNOWN
+        self.rx.reset()
+        self._state = _S_CONFIG
+        self.config.start(now)
+
+    # -- lines from the modem (LineSplitter and RxBlock sink) ---------------------------
+    def on_junk(self, kind):
+        self.junk[kind] = self.junk.get(kind, 0) + 1
+
+    def on_block(self, src, dst, data, stats):
+        self._alive()
+        self.last_rx = stats
+        self._events.append((EV_RX, src, dst, data))
+
+    def _alive(self):
+        self._heard = self._now
+        self._silent = 0
+
+    def on_line(self, raw, is_prompt):
+        now = self._now
+        for c in raw:
+            if c < 32 or c > 126:
+                self.on_junk("binary")
+                return
+        s = raw.decode().strip()
+        if is_prompt:
+            self._alive()
+            self.rx.prompt()
+            self._prompt(now)
+            return
+        if not s or self.rx.line(s):
+            return
+        for m in self.banner_marks:
+            if m in s:
+                self._alive()
+                self.stats["reboots"] += 1
+                self.lost(now, "modem rebooted")
+                return
+        if self._cmd and s == self._text:
+            self.stats["echo"] += 1
+            return
+        if self._reply(now, s):
+            self._alive()
+        else:
+            self.stats["unexpected"] += 1
+
+    def _prompt(self, now):
+        kind = self._cmd
+        if kind == C_ESCAPE:
+            self._finish(now, True, "")
+        elif kind == C_PAYLOAD:
+            # back at the shell without having said it transmits
+            self.mode = M_COMMAND
+            self._finish(now, False, "no " + w.FWD_UP)
+        elif not kind:
+            self.mode = M_COMMAND  # after a transmission, or a restart
+        # otherwise the prompt that followed the previous command
+
+    def _reply(self, now, s):
+        # True when s is an answer the driver knows
+        kind = self._cmd
+        if kind == C_ESCAPE:
+            if s == w.NOT_FOUND:
+                self._finish(now, True, "")
+                return True
+        elif kind == C_AT:
+            if s == "OK" or s == "ERROR":
+                self._finish(now, s == "OK", s)
+                return True
+        elif kind == C_SET or kind == C_QUERY:
+            e = w.parse_echo(s)
+            if e is not None and e[0].lower() == self._want[0].lower():
+                self._finish(now, True, e[1])
+                return True
+            if s == "ERROR" or s.startswith("Command '") or s.startswith("Invalid"):
+                self._finish(now, False, s)
+                return True
+        elif kind == C_ATO:
+            if s.startswith("CONNECT"):
+                self._finish(now, True, s)
+                return True
+            if s == "ERROR" or s == "NO CARRIER":
+                self._finish(now, False, s)
+                return True
+        elif kind == C_PAYLOAD:
+            if s.startswith(w.FWD_UP):
+                self._finish(now, True, s)
+                return True
+        elif kind == C_RANGE:
+            if s[:7].lower() == "tx time":
+                return True
+            r = w.parse_range(s)
+            if r is not None:
+                if r[1] != self.slot.addr:
+                    return False  # someone else's range
+                self._finish(now, True, r)
+                return True
+            if s == w.NO_RESPONSE or s == "ERROR":
+                self._finish(now, False, s)
+                return True
+        # answers that come when nothing is asked
+        if s == "OK" or s == w.NOT_FOUND or s.startswith("CONNECT") or s.startswith(w.FWD_UP):
+            return True
+        return False
