@@ -15,11 +15,12 @@
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_TX_FAILED
+from . import evologics_rx as rx
 from . import evologics_wire as w
 from .base import SansIO
 from .evologics_config import EvologicsConfig
-from .evologics_slot import AIR, CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING, KIND_NAMES, PTIME, QUEUED, AcousticSlot
+from .evologics_slot import CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING, KIND_NAMES, PTIME, QUEUED, AcousticSlot
 
 _S_START = const(0)
 _S_CONFIG = const(1)  # (re)configuring; also "down" while the modem is silent
@@ -30,31 +31,6 @@ C_SEND = const(20)
 C_PTIME = const(21)
 C_PROBE = const(22)
 C_CTRL = const(23)
-
-# notifications: keywords that are never a reply
-_NOTES = (
-    b"RECVSTART",
-    b"RECVEND",
-    b"RECVFAILED",
-    b"RECVSRV",
-    b"BITRATE",
-    b"SRCLEVEL",
-    b"PHYON",
-    b"PHYOFF",
-    b"STATUS",
-    b"RADDR",
-    b"DROPCNT",
-    b"ECLK",
-    b"RTO",
-    b"USBLPHYD",
-    b"USBLPHYP",
-    b"EXPIREDIMS",
-    b"CANCELEDIMS",
-    b"CANCELEDPBM",
-    b"SENDSTART",
-)
-_RECV = (b"RECVIM", b"RECV", b"RECVIMS", b"RECVPBM")
-
 
 class EvologicsDriver(SansIO):
     R_OK = 1
@@ -357,9 +333,9 @@ class EvologicsDriver(SansIO):
         n = r.n
         if n == 0:
             return
-        for k in _RECV:
+        for k in rx.RECV:
             if r.is_word(k):
-                self._recv(now, r, k)
+                rx.recv(self, now, r, k)
                 return
         if r.is_word(b"DELIVEREDIM") or r.is_word(b"FAILEDIM") or r.is_word(b"CANCELEDIM"):
             self._im_outcome(r)
@@ -371,9 +347,9 @@ class EvologicsDriver(SansIO):
             self._send_end(r)
             return
         if r.is_word(b"USBLLONG") or r.is_word(b"USBLANGLES"):
-            self._usbl(r)
+            rx.usbl(self, r)
             return
-        for k in _NOTES:
+        for k in rx.NOTES:
             if r.is_word(k):
                 self.stats["notes"] += 1
                 return
@@ -428,7 +404,7 @@ class EvologicsDriver(SansIO):
             elif kind == self.R_ERROR or kind == self.R_BUSY:
                 if kind == self.R_BUSY:
                     self._hold_until = ticks_add(now, self.busy_backoff_ms)
-                slot.refused(_text(r))
+                slot.refused(rx.text(r))
             else:
                 self.stats["malformed"] += 1
                 self._uncertain(now, "garbled reply to %s" % KIND_NAMES[slot.kind])
@@ -449,37 +425,6 @@ class EvologicsDriver(SansIO):
                 self.lost(now, "modem rebooted")
 
     # -- notifications -------------------------------------------------------
-    def _recv(self, now, r, k):
-        data = r.data()
-        li = 1
-        f1 = r.field(1)
-        if f1 and f1[0] == 112:  # p<pid>
-            li = 2
-        src = r.int_field(li + 1)
-        dst = r.int_field(li + 2)
-        if data is None or src is None or dst is None or not 0 <= src <= 255 or not 0 <= dst <= 255:
-            self.stats["malformed"] += 1
-            return
-        if k == b"RECVIM":
-            flag = r.field(li + 3)
-            base = li + 4
-            if self._reader.specs is w.RX_SPECS_16:
-                rssi, integ, vel = r.int_field(base + 1), r.int_field(base + 2), r.float_field(base + 4)
-            else:
-                rssi, integ, vel = r.int_field(base + 1), r.int_field(base + 2), r.float_field(base + 3)
-            own = self.config.own_addr
-            if flag == b"ack" and own is not None and dst == own:
-                # our modem acknowledges by itself: it is busy meanwhile
-                self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
-        elif k == b"RECV":
-            rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 7)
-        elif k == b"RECVIMS":
-            rssi, integ, vel = r.int_field(li + 5), r.int_field(li + 6), r.float_field(li + 7)
-        else:
-            rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 6)
-        self.last_rx = {"src": src, "rssi": rssi, "integrity": integ, "velocity": vel}
-        self._events.append((EV_RX, src, dst, data))
-
     def _im_outcome(self, r):
         dst = r.int_field(1)
         slot = self.slot
@@ -491,7 +436,7 @@ class EvologicsDriver(SansIO):
                 self._ptime = True
             slot.delivered()
         else:
-            slot.undelivered(_text(r).split(",")[0])
+            slot.undelivered(rx.text(r).split(",")[0])
 
     def _burst_outcome(self, r):
         dst = r.int_field(2)
@@ -511,33 +456,3 @@ class EvologicsDriver(SansIO):
         else:
             self.stats["stale"] += 1
 
-    def _usbl(self, r):
-        if r.is_word(b"USBLLONG"):
-            names = ("ctime", "mtime", "addr", "x", "y", "z", "east", "north", "up", "roll", "pitch", "yaw",
-                     "ptime", "rssi", "integrity", "accuracy")
-        else:
-            names = ("ctime", "mtime", "addr", "lbearing", "lelevation", "bearing", "elevation", "roll", "pitch",
-                     "yaw", "rssi", "integrity", "accuracy")
-        if r.nc != len(names):
-            self.stats["malformed"] += 1
-            return
-        d = {}
-        for i in range(len(names)):
-            v = r.float_field(i + 1)
-            if v is None:
-                self.stats["malformed"] += 1
-                return
-            d[names[i]] = v
-        d["addr"] = int(d["addr"])
-        if r.is_word(b"USBLLONG"):
-            self.last_fix = d
-        else:
-            self.last_angles = d
-
-
-def _text(r):
-    t = r.text()
-    try:
-        return t.decode()
-    except Exception:  # noqa: BLE001 - binary junk in a reply
-        return repr(t)
