@@ -10,6 +10,7 @@
 from .compat import const, ticks_add, ticks_diff
 from .errors import DecodeError
 from .events import AVAILABLE, UNAVAILABLE, UNKNOWN
+from .prng import Prng
 
 ADVERT_LEN = const(2)
 _PERIOD_UNIT_MS = const(4000)
@@ -38,8 +39,15 @@ class Discovery:
     # Availability of the remote nodes heard on one link. Bounded: at most
     # `capacity` nodes are tracked; further nodes are ignored (and counted)
     # until a tracked one is lost and forgotten.
-    def __init__(self, period_ms, lost_after=3, capacity=32):
+    def __init__(self, period_ms, lost_after=3, capacity=32, seed=1, jitter=0.1):
         self.period_ms = period_ms
+        # Adverts go after `period_ms` of silence less a random part of up
+        # to `jitter` of it, drawn again after each advert: two nodes that
+        # start together would otherwise advertise together for ever, and a
+        # half-duplex modem does not hear while it transmits.
+        self.jitter = jitter
+        self._rng = Prng(seed)
+        self._wait = period_ms
         self.lost_after = lost_after
         self._cap = capacity
         self._nodes = {}  # node id -> [last_heard, their period, state]
@@ -109,4 +117,8 @@ class Discovery:
         return [k for k in self._nodes if self._nodes[k][2] == AVAILABLE]
 
     def advert_due(self, now, last_tx):
-        return last_tx is None or ticks_diff(now, last_tx) >= self.period_ms
+        return last_tx is None or ticks_diff(now, last_tx) >= self._wait
+
+    def advert_sent(self):
+        spread = int(self.period_ms * self.jitter)
+        self._wait = self.period_ms - (self._rng.below(spread + 1) if spread > 0 else 0)

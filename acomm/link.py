@@ -103,7 +103,7 @@ class Link:
         self.names = names
         self.listener = listener
         self.queue = TxQueue(queue_capacity, aging_ms)
-        self.discovery = Discovery(advert_period_ms, lost_after)
+        self.discovery = Discovery(advert_period_ms, lost_after, seed=node_id * 7919 + 1)
         self.addr_map = addr_map if addr_map is not None else AddressMap(True, driver.broadcast_addr)
         self.elided = driver.caps.has(CAP_ADDRESSING)
         # who confirms delivery: the modem (its own acks, on elided links
@@ -385,6 +385,7 @@ class Link:
                 # counted as sent even when refused, so a stuck driver is not
                 # asked again on every poll
                 self._last_tx = now
+                self.discovery.advert_sent()
                 advert = encode_advert(self.node_id, self.discovery.period_ms)
                 if self._send_control(now, 1, fr.ADVERT, None, self._next_seq(), advert):
                     self.stats["adverts_sent"] += 1

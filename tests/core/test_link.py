@@ -351,7 +351,10 @@ def test_idle_node_advertises_and_adverts_teach_addresses():
     assert f.ftype == fr.ADVERT and len(data) == 3
     drv.finish(h)
     link.poll(clk())
-    clk.advance(9999)
+    # the next one after the period less a random tenth of it at most
+    wait = link.discovery._wait
+    assert 9000 <= wait <= 10000
+    clk.advance(wait - 1)
     link.poll(clk())
     assert len(drv.sent) == 1
     clk.advance(1)
@@ -359,12 +362,17 @@ def test_idle_node_advertises_and_adverts_teach_addresses():
     assert len(drv.sent) == 2
     drv.finish()
     # traffic postpones the next advert
+    wait = link.discovery._wait
     link.request(clk(), 1, "diver", b"x", 60)
     link.poll(clk())
     drv.finish()
-    clk.advance(9000)
+    clk.advance(wait - 1)
     link.poll(clk())
     assert len(drv.sent) == 3
+    clk.advance(1)
+    link.poll(clk())
+    assert len(drv.sent) == 4 and fr.decode_elided(drv.sent[-1][2], 1, 0).ftype == fr.ADVERT
+    drv.finish()
     # an advert from node 9 at modem address 9 with a 40 s period
     drv.receive(9, 0, elided(fr.ADVERT, 3, bytes((9, 10))))
     link.poll(clk())
