@@ -41,8 +41,17 @@ def seatrac_driver(addr):
     return SeatracDriver(addr, margin_ms=1000, packet_ms=100, byte_ms=8, turnaround_ms=50)
 
 
+def micromodem_driver(addr):
+    from acomm.drivers.micromodem import MicroModemDriver
+
+    return MicroModemDriver(addr, air_scale=0.1, max_range_m=300, modem_wait_ms=1000, margin_ms=500,
+                            reboot_wait_ms=200, retry_ms=500)
+
+
 CASES = {
     "seatrac": (["packet_ms=100", "byte_ms=8", "turnaround_ms=50"], seatrac_driver, b"#0281C1\r\n", b"$02"),
+    "micromodem": (["air_scale=0.1", "max_range_m=300", "data_timeout_ms=1000"], micromodem_driver,
+                   b"$CCCFG,SRC,1*31\r\n", b"$CACFG,SRC,1*33"),
 }
 
 
