@@ -48,8 +48,18 @@ def micromodem_driver(addr):
                             reboot_wait_ms=200, retry_ms=500)
 
 
+EVO_FAST = {"packet_ms": 30, "im_bitrate": 9600, "burst_bitrate": 40000, "turnaround_ms": 20, "max_range_m": 300}
+
+
+def evologics_driver(addr):
+    from acomm.drivers.evologics import EvologicsDriver
+
+    return EvologicsDriver(addr, margin_ms=1000, cmd_timeout_ms=2000, **EVO_FAST)
+
+
 CASES = {
     "seatrac": (["packet_ms=100", "byte_ms=8", "turnaround_ms=50"], seatrac_driver, b"#0281C1\r\n", b"$02"),
+    "evologics": (["%s=%s" % kv for kv in EVO_FAST.items()], evologics_driver, b"AT?AL\n", b"1\r\n"),
     "micromodem": (["air_scale=0.1", "max_range_m=300", "data_timeout_ms=1000"], micromodem_driver,
                    b"$CCCFG,SRC,1*31\r\n", b"$CACFG,SRC,1*33"),
 }
@@ -201,3 +211,49 @@ def test_tcp_clients_share_the_modem_and_the_stream_reconnects(tmp_path):
         s.close()
         host.close()
     assert not os.path.lexists(str(tmp_path / "st"))
+
+
+def test_evologics_over_tcp_and_serial_in_one_water(tmp_path):
+    # modem 1 is reached over TCP (as on port 9200 of a real one), modem 2
+    # over its pty: acomm's driver on each, a frame each way
+    if not available("evologics"):
+        pytest.skip("no evologics emulator")
+    host = EmulatorHost("evologics", str(tmp_path / "evo1"), 1, [(2, str(tmp_path / "evo2"), 150.0)],
+                        EVO_FAST, tcp_port=0)
+    tcp = TcpStream("127.0.0.1", host.stations[0].tcp.port, backoff_s=(0.05, 0.2))
+    ser = open_serial(str(tmp_path / "evo2"), 19200)
+    events = ([], [])
+    nodes = []
+    try:
+        for i, (name, addr, stream) in enumerate((("topside", 1, tcp), ("auv", 2, ser))):
+            node = Node(name, addr, listener=events[i].append)
+            node.names.add("topside", 1)
+            node.names.add("auv", 2)
+            node.add_link("acoustic", evologics_driver(addr), stream, advert_period_ms=600000)
+            nodes.append(node)
+
+        def step_all():
+            host.step(0.002)
+            for n in nodes:
+                n.step()
+
+        def until(cond):
+            end = time.monotonic() + TIMEOUT_S
+            while time.monotonic() < end:
+                step_all()
+                if cond():
+                    return True
+            return False
+
+        assert until(lambda: all(n.links["acoustic"].driver.ready(n.clock()) for n in nodes))
+        r1 = nodes[0].send("acoustic", "auv", b"dive to 20 m", 30, 2, True)
+        assert until(lambda: final(events[0], r1) is not None) and final(events[0], r1) == DELIVERED
+        r2 = nodes[1].send("acoustic", "topside", b"at 20 m", 30, 2, True)
+        assert until(lambda: final(events[1], r2) is not None) and final(events[1], r2) == DELIVERED
+        assert [bytes(e[4]) for e in events[1] if e[0] == EV_RECEIVED] == [b"dive to 20 m"]
+        assert [bytes(e[4]) for e in events[0] if e[0] == EV_RECEIVED] == [b"at 20 m"]
+        assert tcp.connects == 1
+    finally:
+        tcp.close()
+        ser.close()
+        host.close()
