@@ -20,6 +20,7 @@ BENCHES = {
     "discovery": "discovery_workload",
     "codec": "codec_workload",
     "sim": "sim_workload",
+    "teleop": "teleop_workload",
 }
 
 
