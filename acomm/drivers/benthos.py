@@ -133,6 +133,7 @@ class BenthosDriver(SansIO):
         self._heard = None
         self._hold_until = None
         self._silent = 0
+        self._probe_cmd = False  # the keepalive expects command mode
         self._now = 0
         self._h = 0
 
@@ -180,6 +181,7 @@ class BenthosDriver(SansIO):
     def feed(self, now, data):
         self._now = now
         self._lines.feed(data)
+        self.slot.poll(now, self.mode == M_COMMAND)
         self._pump(now)
 
     def poll(self, now):
@@ -259,10 +261,12 @@ class BenthosDriver(SansIO):
             if st == QUEUED:
                 self._owner = _O_SLOT
             elif st == IDLE:
-                # keep the modem in command mode between transmissions, and
-                # check now and then that it is still there (an escape is
-                # harmless in either mode)
-                if self.alive_period_ms and ticks_diff(now, self._written) >= self.alive_period_ms:
+                # keep the modem in command mode between transmissions (an
+                # escape is harmless in either mode); also
+                # check now and then that it is still there, and at once
+                # after a command went unanswered
+                self._probe_cmd = self.mode == M_COMMAND
+                if self._silent or (self.alive_period_ms and ticks_diff(now, self._written) >= self.alive_period_ms):
                     self.mode = M_UNKNOWN
                 if self.mode == M_COMMAND:
                     return
@@ -307,7 +311,7 @@ class BenthosDriver(SansIO):
         else:
             what = {C_ATO: "no CONNECT", C_PAYLOAD: "no " + w.FWD_UP}.get(kind)
             self.mode = M_UNKNOWN
-            self._finish(now, False, what or "no reply to %s" % self._text)
+            self._finish(now, False, what or "no reply")
         if self._silent >= self.down_after and self._state == _S_UP:
             self.lost(now, "modem not answering")
 
@@ -368,6 +372,11 @@ class BenthosDriver(SansIO):
                 return
         if self._cmd and s == self._text:
             self.stats["echo"] += 1
+            if self._state == _S_UP:
+                # the setup turned the echo off: the modem restarted
+                # without a banner and lost its settings
+                self.stats["reboots"] += 1
+                self.lost(now, "modem restarted (its echo is back)")
             return
         if self._reply(now, s):
             self._alive()
@@ -377,6 +386,13 @@ class BenthosDriver(SansIO):
     def _prompt(self, now):
         kind = self._cmd
         if kind == C_ESCAPE:
+            if self._owner == _O_PROBE and self._probe_cmd:
+                # a keepalive found the modem online, where the driver
+                # never leaves it (@OpMode=0): it restarted
+                self._cmd = 0
+                self.stats["reboots"] += 1
+                self.lost(now, "modem restarted (found online)")
+                return
             self._finish(now, True, "")
         elif kind == C_PAYLOAD:
             # back at the shell without having said it transmits
@@ -402,7 +418,7 @@ class BenthosDriver(SansIO):
             if e is not None and e[0].lower() == self._want[0].lower():
                 self._finish(now, True, e[1])
                 return True
-            if s == "ERROR" or s.startswith("Command '") or s.startswith("Invalid"):
+            if s == "ERROR" or (s.startswith("Command '") and s != w.NOT_FOUND) or s.startswith("Invalid"):
                 self._finish(now, False, s)
                 return True
         elif kind == C_ATO:

@@ -86,10 +86,11 @@ class BenthosConfig:
 
     def reply(self, now, ok, detail):
         # the outcome of the current step's command
-        if not ok:
-            self.failed(now, detail)
-            return
         kind, name, value = self.steps[self.i]
+        if not ok:
+            what = "AT" if kind == S_AT else ("@" + name + ("=" + value if kind == S_SET else ""))
+            self.failed(now, "%s: %s" % (what, detail))
+            return
         if kind == S_QUERY and name == "LocalAddr":
             a = w.number(detail)
             if a is None or a > w.MAX_ADDR:

@@ -120,7 +120,7 @@ class BenthosEmulator(SansIO):
         f = self._fault(("truncate",) if kind == "data" else ("corrupt", "truncate"), kind)
         if f is not None and f[0] == "corrupt":
             b = bytearray(data)
-            b[len(lines[0]) // 2] = 0x23  # '#' in the middle of the first line
+            b[min(2, len(lines[0]) - 1)] = 0x23  # '#' in the first word
             data = bytes(b)
         elif f is not None:
             data = data[: len(data) // 2] + (b"\r\n" if f[3] else b"")
