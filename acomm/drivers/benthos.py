@@ -21,6 +21,7 @@ from ..errors import AcommError, EncodeError
 from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
 from . import benthos_wire as w
 from .base import SansIO
+from .benthos_answers import C_AT, C_ATO, C_ESCAPE, C_PAYLOAD, C_QUERY, C_RANGE, C_SET, INFO, answer, stray
 from .benthos_config import BenthosConfig, setup_steps
 from .benthos_lines import LineSplitter, RxBlock
 from .benthos_slot import IDLE, K_DATA, K_PING, QUEUED, Slot
@@ -33,14 +34,6 @@ M_UNKNOWN = const(0)
 M_COMMAND = const(1)
 M_ONLINE = const(2)
 
-# outstanding commands
-C_ESCAPE = const(1)
-C_AT = const(2)
-C_SET = const(3)
-C_QUERY = const(4)
-C_ATO = const(5)
-C_PAYLOAD = const(6)
-C_RANGE = const(7)
 
 _O_CONFIG = const(0)
 _O_SLOT = const(1)
@@ -58,6 +51,7 @@ class BenthosDriver(SansIO):
         rcv_all=True,
         ac_rsp_tmo_ms=10000,
         extra_settings=(),
+        prompt_setting="P1Prompt",
         packet_ms=500,
         guard_ms=1300,
         cmd_timeout_ms=2000,
@@ -106,7 +100,7 @@ class BenthosDriver(SansIO):
             latency_ms=fwd_delay_ms + self.airtime_ms(mtu) + 1000,
             flags=CAP_ADDRESSING | CAP_BROADCAST | CAP_RANGING,
         )
-        steps = setup_steps(address, tx_rate, fwd_delay_ms, rcv_all, ac_rsp_tmo_ms, extra_settings)
+        steps = setup_steps(address, tx_rate, fwd_delay_ms, rcv_all, ac_rsp_tmo_ms, extra_settings, prompt_setting)
         self.config = BenthosConfig(self, steps, retry_ms)
         self.slot = Slot(self, mtu)
         self.remote = None  # the @RemoteAddr the modem last confirmed
@@ -404,47 +398,9 @@ class BenthosDriver(SansIO):
 
     def _reply(self, now, s):
         # True when s is an answer the driver knows
-        kind = self._cmd
-        if kind == C_ESCAPE:
-            if s == w.NOT_FOUND:
-                self._finish(now, True, "")
-                return True
-        elif kind == C_AT:
-            if s == "OK" or s == "ERROR":
-                self._finish(now, s == "OK", s)
-                return True
-        elif kind == C_SET or kind == C_QUERY:
-            e = w.parse_echo(s)
-            if e is not None and e[0].lower() == self._want[0].lower():
-                self._finish(now, True, e[1])
-                return True
-            if s == "ERROR" or (s.startswith("Command '") and s != w.NOT_FOUND) or s.startswith("Invalid"):
-                self._finish(now, False, s)
-                return True
-        elif kind == C_ATO:
-            if s.startswith("CONNECT"):
-                self._finish(now, True, s)
-                return True
-            if s == "ERROR" or s == "NO CARRIER":
-                self._finish(now, False, s)
-                return True
-        elif kind == C_PAYLOAD:
-            if s.startswith(w.FWD_UP):
-                self._finish(now, True, s)
-                return True
-        elif kind == C_RANGE:
-            if s[:7].lower() == "tx time":
-                return True
-            r = w.parse_range(s)
-            if r is not None:
-                if r[1] != self.slot.addr:
-                    return False  # someone else's range
-                self._finish(now, True, r)
-                return True
-            if s == w.NO_RESPONSE or s == "ERROR":
-                self._finish(now, False, s)
-                return True
-        # answers that come when nothing is asked
-        if s == "OK" or s == w.NOT_FOUND or s.startswith("CONNECT") or s.startswith(w.FWD_UP):
-            return True
-        return False
+        r = answer(self._cmd, self._want[0] if self._want else "", self.slot.addr, s)
+        if r is None:
+            return stray(s)
+        if r is not INFO:
+            self._finish(now, r[0], r[1])
+        return True

@@ -31,8 +31,10 @@ S_SET = 1
 S_QUERY = 2
 
 
-def setup_steps(address, tx_rate, fwd_delay_ms, rcv_all, ac_rsp_tmo_ms, extra):
-    steps = [(S_AT, "", ""), (S_SET, "P1EchoChar", "Dis"), (S_SET, "P1Prompt", "7"), (S_SET, "Verbose", "3")]
+def setup_steps(address, tx_rate, fwd_delay_ms, rcv_all, ac_rsp_tmo_ms, extra, prompt_setting="P1Prompt"):
+    # prompt_setting: goby3 at 0bba729 writes @Prompt=7, the reference
+    # (goby3 at 2603ff12) @P1Prompt=7
+    steps = [(S_AT, "", ""), (S_SET, "P1EchoChar", "Dis"), (S_SET, prompt_setting, "7"), (S_SET, "Verbose", "3")]
     steps.append((S_SET, "DataRetry", "Dis"))
     steps.append((S_SET, "FwdDelay", w.secs_text(fwd_delay_ms)))
     if address is not None:

@@ -822,7 +822,7 @@ WORDS = (
 
 
 def plausible(rng, d):
-    from acomm.drivers import benthos as b
+    from acomm.drivers import benthos_answers as b
 
     k = d._cmd
     if k and rng.chance(0.5 if d.ready(d._now) else 0.9):
