@@ -255,10 +255,10 @@ class BenthosDriver(SansIO):
             if st == QUEUED:
                 self._owner = _O_SLOT
             elif st == IDLE:
-                # keep the modem in command mode between transmissions (an
-                # escape is harmless in either mode); also
-                # check now and then that it is still there, and at once
-                # after a command went unanswered
+                # Escape (harmless in either mode) to keep the modem in
+                # command mode between transmissions, now and then to see
+                # that it is still there, and at once after a command
+                # went unanswered.
                 self._probe_cmd = self.mode == M_COMMAND
                 if self._silent or (self.alive_period_ms and ticks_diff(now, self._written) >= self.alive_period_ms):
                     self.mode = M_UNKNOWN
