@@ -61,6 +61,7 @@ def main(argv):
         names = sorted(n for n in os.listdir(d) if n.startswith("test_") and n.endswith(".py"))
         for fname in names:
             modname = fname[:-3]
+            before = set(sys.modules)
             try:
                 mod = __import__(modname)
             except Exception as e:
@@ -90,11 +91,14 @@ def main(argv):
                 dt = _diff(_ms(), t0)
                 if dt > 2000:
                     print("slow", modname + "." + name, dt, "ms")
-            # Drop each test module once it has run, and collect: the unix
-            # port's heap is 2 MB, and tests that need large blocks (the
-            # queue flood) must not depend on how many modules ran before.
+            # Drop each test module, and every module it imported, once it
+            # has run, and collect: the unix port's heap is 2 MB, and tests
+            # that need large blocks (the queue flood) must not depend on
+            # how many modules (drivers, emulators) ran before.
             mod = fn = None
-            sys.modules.pop(modname, None)
+            for m in list(sys.modules):
+                if m not in before:
+                    sys.modules.pop(m, None)
             gc.collect()
         sys.path.pop(0)
     for f in failures:
