@@ -57,8 +57,17 @@ def evologics_driver(addr):
     return EvologicsDriver(addr, margin_ms=1000, cmd_timeout_ms=2000, **EVO_FAST)
 
 
+def benthos_driver(addr):
+    from acomm.drivers.benthos import BenthosDriver
+
+    return BenthosDriver(addr, packet_ms=100, guard_ms=150, cmd_timeout_ms=1000, prompt_timeout_ms=1000,
+                         ac_rsp_tmo_ms=2000)
+
+
 CASES = {
     "seatrac": (["packet_ms=100", "byte_ms=8", "turnaround_ms=50"], seatrac_driver, b"#0281C1\r\n", b"$02"),
+    "benthos": (["packet_ms=100", "guard_ms=100", "turnaround_ms=50", "boot_ms=200"], benthos_driver, b"+++",
+                b"user:1>"),
     "evologics": (["%s=%s" % kv for kv in EVO_FAST.items()], evologics_driver, b"AT?AL\n", b"1\r\n"),
     "micromodem": (["air_scale=0.1", "max_range_m=300", "data_timeout_ms=1000"], micromodem_driver,
                    b"$CCCFG,SRC,1*31\r\n", b"$CACFG,SRC,1*33"),
@@ -129,6 +138,7 @@ def test_emulate_command_answers_and_carries_frames(tmp_path, modem):
     try:
         # a terminal program's view: raw bytes in, the modem's answer out
         raw = open_serial(em.links[0], 19200)
+        time.sleep(0.3)  # some modems want a quiet line first (Benthos: the +++ guard)
         raw.write(probe)
         got = read_until(raw, answer)
         assert answer in got, got
