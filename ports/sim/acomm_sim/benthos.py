@@ -30,6 +30,7 @@ from acomm.drivers import benthos_wire as w
 from acomm.drivers.base import SansIO
 
 from .benthos_shell import Shell, defaults
+from .faults import FaultModes, cut
 from .benthos_xcvr import Transceiver
 
 BANNER = (
@@ -43,7 +44,7 @@ M_ONLINE = 1
 _STATS = "MPD:03.2 SNR:31.3 AGC:91 SPD:+00.0 CCERR:013"  # the reference's figures
 
 
-class BenthosEmulator(SansIO):
+class BenthosEmulator(SansIO, FaultModes):
     def __init__(
         self,
         medium,
@@ -123,7 +124,7 @@ class BenthosEmulator(SansIO):
             b[min(2, len(lines[0]) - 1)] = 0x23  # '#' in the first word
             data = bytes(b)
         elif f is not None:
-            data = data[: len(data) // 2] + (b"\r\n" if f[3] else b"")
+            data = cut(data, f[3])
         self._out.extend(data)
 
     def prompt(self):
@@ -131,42 +132,30 @@ class BenthosEmulator(SansIO):
             self.emit("prompt", w.prompt_text(self.prompt_n), False)
 
     # -- fault modes ----------------------------------------------------------------------
-    def inject_noise(self, data):
-        self._out.extend(data)
-
     def corrupt_next(self, what=None, count=1):
         # what: "data" (a CRC:Fail block instead of the good one), "reply",
         # "connect", "fwd", "prompt", "range", or None for the next of any
-        self._faults.append(["corrupt", what, count, None])
+        self._add_fault("corrupt", what, count, None)
 
     def truncate_next(self, what=None, count=1, terminate=True):
         # the line (or block) stops half way, with CR LF, or without any end
         # so that it runs into the next line
-        self._faults.append(["truncate", what, count, terminate])
+        self._add_fault("truncate", what, count, terminate)
 
     def swallow_next(self, what=None, count=1, execute=False):
         # what: the start of a command line ("ATO", "@RemoteAddr", "ATR"...).
         # The command is never answered; with execute=True it is carried out
         # and only its answer is lost.
-        self._faults.append(["swallow", what, count, execute])
+        self._add_fault("swallow", what, count, execute)
 
-    def _fault(self, kinds, what):
-        for f in self._faults:
-            if f[0] not in kinds:
-                continue
-            if f[1] is None:
-                if what in ("echo", "banner"):
-                    continue
-            elif f[0] == "swallow":
-                if not what.upper().startswith(f[1].upper()):
-                    continue
-            elif f[1] != what:
-                continue
-            f[2] -= 1
-            if f[2] <= 0:
-                self._faults.remove(f)
-            return f
-        return None
+    def _fault_matches(self, f, what):
+        # any (None) is never the echo or the banner; a swallow is keyed by
+        # how the command line starts, in any case; the rest by output kind
+        if f[1] is None:
+            return what not in ("echo", "banner")
+        if f[0] == "swallow":
+            return what.upper().startswith(f[1].upper())
+        return f[1] == what
 
     def reboot(self, now):
         # Power cycle or watchdog: everything in flight is forgotten, the
@@ -179,15 +168,13 @@ class BenthosEmulator(SansIO):
         self._mute = False
         self._mute_range = False
         self._power_up(now)
-        self._booting_until = ticks_add(now, self.boot_ms)
+        self._start_boot(now)
 
     def _booted(self, now):
         self._booting_until = None
         self.address = int(self.settings["LocalAddr"])
         self.medium.attach(self.address, self)
-        for ln in self.banner:
-            self._out.extend(ln)
-            self._out.extend(b"\r\n")
+        self._print_banner()
         if self.mode == M_COMMAND:
             self.prompt()
 
@@ -218,10 +205,8 @@ class BenthosEmulator(SansIO):
 
     def poll(self, now):
         self.medium.poll(now)
-        if self._booting_until is not None:
-            if ticks_diff(now, self._booting_until) < 0:
-                return
-            self._booted(now)
+        if self._still_booting(now):
+            return
         self.xcvr.poll(now)
         self._flush(now)
 

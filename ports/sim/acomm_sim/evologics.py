@@ -23,10 +23,11 @@
 # truncated output line, a command never answered, and a reboot at any
 # moment with its power-up text.
 
-from acomm.compat import ticks_add, ticks_diff
+from acomm.compat import ticks_diff
 from acomm.drivers import evologics_wire as w
 from acomm.drivers.base import SansIO
 
+from .faults import FaultModes
 from .evologics_xcvr import P_BURST, P_IM, P_IMS, P_PBM, Transceiver
 
 BANNER = (b"EvoLogics S2C modem (acomm emulator)", b"firmware 1.7 started")
@@ -35,7 +36,7 @@ _SENDS = {b"*SENDIM": P_IM, b"*SENDIMS": P_IMS, b"*SENDPBM": P_PBM, b"*SEND": P_
 _FORMAT = b"ERROR WRONG FORMAT"
 
 
-class EvologicsEmulator(SansIO):
+class EvologicsEmulator(SansIO, FaultModes):
     def __init__(
         self,
         medium,
@@ -107,9 +108,6 @@ class EvologicsEmulator(SansIO):
         # the modem's own microsecond clock (since power-up), 32 bits
         return (ticks_diff(t, self._boot_at) * 1000) & 0xFFFFFFFF
 
-    def booting(self):
-        return self._booting_until is not None
-
     # -- the port ------------------------------------------------------------------
     def feed(self, now, data):
         self._now = now
@@ -146,10 +144,8 @@ class EvologicsEmulator(SansIO):
     def poll(self, now):
         self._now = now
         self.medium.poll(now)
-        if self._booting_until is not None:
-            if ticks_diff(now, self._booting_until) < 0:
-                return
-            self._booted(now)
+        if self._still_booting(now):
+            return
         self.xcvr.poll(now)
         if self._raw and self.remote_addr is not None and self.xcvr.busy(now) is None:
             chunk = bytes(self._raw[: self.burst_max])
@@ -192,38 +188,30 @@ class EvologicsEmulator(SansIO):
         self.notify(head + data)
 
     # -- fault modes -------------------------------------------------------------
-    def inject_noise(self, data):
-        self._out.extend(data)
-
     def corrupt_next(self, prefix=None, count=1):
         # the next output line(s) starting with prefix (any when None) come
         # out with one character damaged
-        self._faults.append(["damage", prefix, count, None])
+        self._add_fault("damage", prefix, count, None)
 
     def truncate_next(self, prefix=None, count=1, terminate=True):
         # the next output line(s) stop half way: with CR LF, or without
         # (terminate=False) so that the next line runs into it
-        self._faults.append(["truncate", prefix, count, terminate])
+        self._add_fault("truncate", prefix, count, terminate)
 
     def swallow_next(self, prefix=None, count=1, execute=False):
         # the next command(s) starting with prefix are never answered; with
         # execute=True they are still carried out (only the answer is lost)
-        self._faults.append(["swallow", prefix, count, execute])
+        self._add_fault("swallow", prefix, count, execute)
 
-    def _fault(self, kinds, line):
-        for f in self._faults:
-            if f[0] in kinds and (f[1] is None or line[: len(f[1])] == f[1]):
-                f[2] -= 1
-                if f[2] <= 0:
-                    self._faults.remove(f)
-                return f
-        return None
+    def _fault_matches(self, f, line):
+        # faults are keyed by how the line starts
+        return f[1] is None or line[: len(f[1])] == f[1]
 
     def reboot(self, now):
         # Power cycle or watchdog: whatever was in flight is forgotten,
         # unsaved settings are lost, the port is quiet, then the power-up
         # text appears.
-        self._booting_until = ticks_add(now, self.boot_ms)
+        self._start_boot(now)
         self._boot_at = now
         self._reader.reset()
         self._mute = False
@@ -239,9 +227,7 @@ class EvologicsEmulator(SansIO):
         self._load()
         self.xcvr.addr = self.address
         self.medium.attach(self.address, self.xcvr)
-        for ln in self.banner:
-            self._out.extend(ln)
-            self._out.extend(b"\r\n")
+        self._print_banner()
 
     def steal_control(self):
         # another client took control: commands get ERROR NO CONTROL until

@@ -25,6 +25,7 @@ from acomm.drivers import micromodem_nmea as nm
 from acomm.drivers.base import SansIO
 from acomm.drivers.micromodem_air import FRAME_BYTES, FRAMES_PER_PACKET, Airtime
 
+from .faults import FaultModes, cut, digit_off
 from .micromodem_xcvr import Transceiver
 
 VERSION = "0.94.0.00"
@@ -36,7 +37,7 @@ def _kind(name):
     return None if name is None else name[-3:]
 
 
-class MicroModemEmulator(SansIO):
+class MicroModemEmulator(SansIO, FaultModes):
     def __init__(
         self,
         medium,
@@ -95,9 +96,6 @@ class MicroModemEmulator(SansIO):
     def max_travel_ms(self):
         return self.xcvr.air.travel_ms(self.max_range_m, self.medium.sound_speed)
 
-    def booting(self):
-        return self._booting_until is not None
-
     # -- the serial port -----------------------------------------------------------
     def feed(self, now, data):
         self._now = now
@@ -108,10 +106,8 @@ class MicroModemEmulator(SansIO):
     def poll(self, now):
         self._now = now
         self.medium.poll(now)
-        if self._booting_until is not None:
-            if ticks_diff(now, self._booting_until) < 0:
-                return
-            self._booted(now)
+        if self._still_booting(now):
+            return
         self.xcvr.poll(now)
         c = self._cycle
         if c is not None and c[5] is not None and ticks_diff(now, c[5]) >= 0:
@@ -129,44 +125,31 @@ class MicroModemEmulator(SansIO):
         if f is not None and f[0] == "crc":
             line = bytearray(line)
             k = line.index(b"*") + 2
-            line[k] = 0x30 if line[k] != 0x30 else 0x31  # one checksum digit off
+            digit_off(line, k)
             line = bytes(line)
         elif f is not None:
-            keep = len(line) // 2
-            line = line[:keep] + (b"\r\n" if f[3] else b"")
+            line = cut(line, f[3])
         self._out.extend(line)
 
     # -- fault modes -----------------------------------------------------------------
-    def inject_noise(self, data):
-        self._out.extend(data)
-
     def corrupt_next(self, name=None, count=1):
         # the next `count` output sentences (of this type) carry a wrong checksum
-        self._faults.append(["crc", _kind(name), count, False])
+        self._add_fault("crc", _kind(name), count, False)
 
     def truncate_next(self, name=None, count=1, terminate=True):
         # the line stops half way: with CR LF, or (terminate=False) with the
         # next line's '$' as its only end
-        self._faults.append(["truncate", _kind(name), count, terminate])
+        self._add_fault("truncate", _kind(name), count, terminate)
 
     def swallow_next(self, name=None, count=1, execute=False):
         # the next host sentence (of this type) is never answered; with
         # execute=True it is still carried out and only its echo is lost
-        self._faults.append(["swallow", _kind(name), count, execute])
-
-    def _fault(self, kinds, kind):
-        for f in self._faults:
-            if f[0] in kinds and (f[1] is None or f[1] == kind):
-                f[2] -= 1
-                if f[2] <= 0:
-                    self._faults.remove(f)
-                return f
-        return None
+        self._add_fault("swallow", _kind(name), count, execute)
 
     def reboot(self, now):
         # Power cycle or watchdog: everything in flight is forgotten, the port
         # goes quiet, then the $CAREV INIT banner appears.
-        self._booting_until = ticks_add(now, self.boot_ms)
+        self._start_boot(now)
         self._rd.reset()
         self._mute = None
         self._cycle = None

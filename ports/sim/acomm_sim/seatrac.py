@@ -19,8 +19,10 @@
 from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers import seatrac_wire as w
 
-from .seatrac_xcvr import Transceiver
 from acomm.drivers.base import SansIO
+
+from .faults import FaultModes, digit_off
+from .seatrac_xcvr import Transceiver
 
 BANNER = (
     b"Blueprint Subsea SeaTrac (acomm emulator)",
@@ -44,7 +46,7 @@ def default_settings(beacon_id):
     return s
 
 
-class SeatracEmulator(SansIO):
+class SeatracEmulator(SansIO, FaultModes):
     def __init__(
         self,
         medium,
@@ -116,10 +118,8 @@ class SeatracEmulator(SansIO):
     def poll(self, now):
         self._now = now
         self.medium.poll(now)
-        if self._booting_until is not None:
-            if ticks_diff(now, self._booting_until) < 0:
-                return
-            self._booted(now)
+        if self._still_booting(now):
+            return
         self.xcvr.poll(now)
 
     def emit(self, cid, payload):
@@ -134,8 +134,7 @@ class SeatracEmulator(SansIO):
         k = w.encode_into(line, w.SYNC_RSP, msg, len(msg))
         f = self._fault(("crc", "truncate"), cid)
         if f is not None and f[0] == "crc":
-            c = line[k - 3]
-            line[k - 3] = 0x30 if c != 0x30 else 0x31  # one CRC digit off
+            digit_off(line, k - 3)
         elif f is not None:
             keep = k // 2
             line[keep] = 13
@@ -144,35 +143,23 @@ class SeatracEmulator(SansIO):
         self._out.extend(memoryview(line)[:k])
 
     # -- fault modes -----------------------------------------------------------
-    def inject_noise(self, data):
-        self._out.extend(data)
-
     def corrupt_next(self, cid=None, count=1):
-        self._faults.append(["crc", cid, count, False])
+        self._add_fault("crc", cid, count, False)
 
     def truncate_next(self, cid=None, count=1, terminate=True):
         # the line stops half way: with CR LF, or (terminate=False) with
         # the next line's '$' as the only end
-        self._faults.append(["truncate", cid, count, terminate])
+        self._add_fault("truncate", cid, count, terminate)
 
     def swallow_next(self, cid=None, count=1, execute=False):
         # the next command is never answered; with execute=True it is still
         # carried out (only the answer is lost)
-        self._faults.append(["swallow", cid, count, execute])
-
-    def _fault(self, kinds, cid):
-        for f in self._faults:
-            if f[0] in kinds and (f[1] is None or f[1] == cid):
-                f[2] -= 1
-                if f[2] <= 0:
-                    self._faults.remove(f)
-                return f
-        return None
+        self._add_fault("swallow", cid, count, execute)
 
     def reboot(self, now):
         # Power cycle or watchdog: everything in flight is forgotten, the
         # port goes quiet, then the power-up text appears.
-        self._booting_until = ticks_add(now, self.boot_ms)
+        self._start_boot(now)
         self._boot_at = now
         self._dec.reset()
         self._mute = 0
@@ -186,9 +173,7 @@ class SeatracEmulator(SansIO):
         self._booting_until = None
         self.xcvr.addr = self.beacon_id
         self.medium.attach(self.beacon_id, self.xcvr)
-        for ln in self.banner:
-            self._out.extend(ln)
-            self._out.extend(b"\r\n")
+        self._print_banner()
         if self.boot_message == w.CID_SYS_ALIVE:
             self._alive()
         elif self.boot_message == w.CID_SYS_INFO:
