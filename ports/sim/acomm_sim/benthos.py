@@ -171,7 +171,6 @@ class BenthosEmulator(SansIO, FaultModes):
         self._start_boot(now)
 
     def _booted(self, now):
-        self._booting_until = None
         self.address = int(self.settings["LocalAddr"])
         self.medium.attach(self.address, self)
         self._print_banner()

@@ -218,15 +218,11 @@ class EvologicsEmulator(SansIO, FaultModes):
         self._esc = 0
         self._in_cmd = False
         self._raw = bytearray()
-        self.xcvr.reset()
-        self.medium.cancel(self.xcvr.addr, now)
-        self.medium.detach(self.xcvr.addr)
+        self._leave_medium(now)
 
     def _booted(self, now):
-        self._booting_until = None
         self._load()
-        self.xcvr.addr = self.address
-        self.medium.attach(self.address, self.xcvr)
+        self._join_medium(self.address)
         self._print_banner()
 
     def steal_control(self):
@@ -284,21 +280,11 @@ class EvologicsEmulator(SansIO, FaultModes):
         elif name == b"?AM":
             self.reply(b"%d" % self.highest_addr)
         elif name == b"!AM":
-            v = _int(arg)
-            if v not in (2, 6, 14, 30, 62, 126, 254):
-                self.reply(_FORMAT)
-            else:
-                self.highest_addr = v
-                self.reply(b"OK")
+            self._set("highest_addr", arg, (2, 6, 14, 30, 62, 126, 254))
         elif name == b"?CA":
             self.reply(b"%d" % self.sound_speed)
         elif name == b"!CA":
-            v = _int(arg)
-            if v is None or not 1300 <= v <= 1700:
-                self.reply(_FORMAT)
-            else:
-                self.sound_speed = v
-                self.reply(b"OK")
+            self._set("sound_speed", arg, range(1300, 1701))
         elif name == b"@ZX" and arg in (b"0", b"1"):
             self.zx = arg == b"1"
             self.reply(b"OK")
@@ -308,12 +294,7 @@ class EvologicsEmulator(SansIO, FaultModes):
         elif name == b"?RP":
             self.reply(b"1" if self.promiscuous else b"0")
         elif name == b"!AR":
-            v = _int(arg)
-            if v is None or not 0 <= v <= 255:
-                self.reply(_FORMAT)
-            else:
-                self.remote_addr = v
-                self.reply(b"OK")
+            self._set("remote_addr", arg, range(256))
         elif name == b"?T":
             self.reply(b"%d" % self.ptime_us)
         elif name == b"!L" and arg in (b"0", b"1", b"2", b"3"):
@@ -341,6 +322,16 @@ class EvologicsEmulator(SansIO, FaultModes):
         else:
             self.ignored += 1
             self.reply(_FORMAT)
+
+    def _set(self, attr, arg, allowed):
+        # a plain numeric setting: OK and taken when allowed, else the
+        # format error
+        v = _int(arg)
+        if v is None or v not in allowed:
+            self.reply(_FORMAT)
+            return
+        setattr(self, attr, v)
+        self.reply(b"OK")
 
     def _set_address(self, arg):
         v = _int(arg)

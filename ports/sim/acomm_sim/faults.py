@@ -13,7 +13,9 @@
 # `terminate` for "truncate", `execute` for "swallow".
 #
 # Needs from the emulator: _out (SansIO), _booting_until (None while up),
-# banner (lines without their end), boot_ms and _booted(now).
+# banner (lines without their end), boot_ms and _booted(now); for
+# _leave_medium / _join_medium, medium and an xcvr that has addr and reset()
+# (the Benthos emulator is its own node on the medium and does without).
 
 from acomm.compat import ticks_add, ticks_diff
 
@@ -49,13 +51,27 @@ class FaultModes:
         self._booting_until = ticks_add(now, self.boot_ms)
 
     def _still_booting(self, now):
-        # For poll(): True while the restart lasts; at its end _booted(now).
+        # For poll(): True while the restart lasts; at its end the emulator
+        # is up again and its _booted(now) prints the power-up text.
         if self._booting_until is None:
             return False
         if ticks_diff(now, self._booting_until) < 0:
             return True
+        self._booting_until = None
         self._booted(now)
         return False
+
+    def _leave_medium(self, now):
+        # a restart cuts our packet short and nobody hears us until it ends
+        x = self.xcvr
+        x.reset()
+        self.medium.cancel(x.addr, now)
+        self.medium.detach(x.addr)
+
+    def _join_medium(self, addr):
+        # back up, at the address the (possibly changed) settings give
+        self.xcvr.addr = addr
+        self.medium.attach(addr, self.xcvr)
 
     def _print_banner(self):
         for ln in self.banner:

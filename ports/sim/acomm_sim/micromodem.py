@@ -153,15 +153,11 @@ class MicroModemEmulator(SansIO, FaultModes):
         self._rd.reset()
         self._mute = None
         self._cycle = None
-        self.xcvr.reset()
-        self.medium.cancel(self.xcvr.addr, now)
-        self.medium.detach(self.xcvr.addr)
+        self._leave_medium(now)
 
     def _booted(self, now):
-        self._booting_until = None
         self.address = self.nvram["SRC"]
-        self.xcvr.addr = self.address
-        self.medium.attach(self.address, self.xcvr)
+        self._join_medium(self.address)
         self._announce()
 
     def _announce(self):

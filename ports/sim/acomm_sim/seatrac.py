@@ -163,16 +163,12 @@ class SeatracEmulator(SansIO, FaultModes):
         self._boot_at = now
         self._dec.reset()
         self._mute = 0
-        self.xcvr.reset()
         self.settings = bytearray(self.eeprom)
         self.beacon_id = self.settings[96]
-        self.medium.cancel(self.xcvr.addr, now)
-        self.medium.detach(self.xcvr.addr)
+        self._leave_medium(now)
 
     def _booted(self, now):
-        self._booting_until = None
-        self.xcvr.addr = self.beacon_id
-        self.medium.attach(self.beacon_id, self.xcvr)
+        self._join_medium(self.beacon_id)
         self._print_banner()
         if self.boot_message == w.CID_SYS_ALIVE:
             self._alive()
