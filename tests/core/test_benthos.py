@@ -5,7 +5,6 @@
 # The modem reports no delivery, so acknowledged sends are confirmed by the
 # links' own acomm acks in the elided frames.
 from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING
-from acomm.clock import ManualClock
 from acomm.compat import TICKS_MAX
 from acomm.drivers import benthos_wire as w
 from acomm.drivers.benthos import BenthosDriver
@@ -17,24 +16,20 @@ from acomm.events import (
     EV_DRIVER_UP,
     EV_RANGE,
     EV_RANGE_RECEIVED,
-    EV_RECEIVED,
     EV_RX,
     EV_TX_DONE,
     EV_TX_FAILED,
-    FAILED,
     QUEUED,
     TRANSMITTED,
     TRANSMITTING,
     WAITING,
 )
-from acomm.fakeuart import uart_pair
 from acomm.link import BROADCAST
-from acomm.names import AddressMap
-from acomm.node import Node
 from acomm_sim.benthos import BenthosEmulator
 from acomm_sim.medium import Medium
 from checks import raises
-from linkcheck import Recorder, check_exactly_one_final
+import modemnet
+from linkcheck import check_exactly_one_final
 
 # The reference's lines (section 4.6 and the block of 4.3).
 RANGE_LINE = b"Range 1 to 2 : 1499.6 m  (Round-trip  1999.5 ms) speed  0.0 m/s"
@@ -371,15 +366,7 @@ def test_driver_notices_restarts_and_silence():
 
 
 # -- byte-exact: the emulator ------------------------------------------------------------
-def run(emus, t0, t1, step=10):
-    out = [bytearray() for _ in emus]
-    t = t0
-    while t <= t1:
-        for i, e in enumerate(emus):
-            e.poll(t)
-            out[i] += e.take_output()
-        t += step
-    return [bytes(o) for o in out]
+run = modemnet.run_emulators
 
 
 def configured_pair(distance=1499.6):
@@ -490,70 +477,14 @@ def test_emulator_modes_and_settings():
 
 
 # -- two nodes over FakeUART, emulated modems on one medium ----------------------------------
-BUOY, DIVER = ("buoy", 10, 1), ("diver", 20, 2)
+check_recovered = modemnet.check_recovered
 
 
-class Net:
+class Net(modemnet.Net):
     # Each node's Link drives a BenthosDriver over a FakeUART line whose other
     # end the test pumps into that node's emulated modem.
-    def __init__(self, start=0, distance=100.0, emu_opts=None, link_opts=None, drv_opts=None):
-        self.clk = ManualClock(start)
-        self.medium = Medium(default_distance=distance)
-        self.nodes = {}
-        self.emus = {}
-        self.drivers = {}
-        self.ends = {}
-        stations = (BUOY, DIVER)
-        for name, nid, addr in stations:
-            a, b = uart_pair(clock=self.clk)
-            node = Node(name, nid, self.clk, listener=Recorder())
-            amap = AddressMap(False, 255)
-            for other, oid, oaddr in stations + (("ghost", 30, 5),):
-                node.names.add(other, oid)
-                amap.set(oid, oaddr)
-            drv = BenthosDriver(addr, **(drv_opts or {}))
-            opts = {"advert_period_ms": 600000, "addr_map": amap}
-            opts.update(link_opts or {})
-            node.add_link("acoustic", drv, a, **opts)
-            self.nodes[name] = node
-            self.drivers[name] = drv
-            self.emus[name] = BenthosEmulator(self.medium, addr, now=start, **(emu_opts or {}))
-            self.ends[name] = b
-
-    def run(self, ms, step=20, until=None):
-        clk = self.clk
-        for _ in range(ms // step):
-            now = clk()
-            for name, node in self.nodes.items():
-                node.step(now)
-                e = self.emus[name]
-                end = self.ends[name]
-                data = end.read()
-                if data:
-                    e.feed(now, data)
-                e.poll(now)
-                out = e.take_output()
-                if out:
-                    end.write(out)
-            clk.advance(step)
-            if until is not None and until():
-                return True
-        return until is None
-
-    def send(self, src, dst, data, ack=False, life=60):
-        return self.nodes[src].send("acoustic", dst, data, life, 2, ack)
-
-    def rec(self, name):
-        return self.nodes[name].listener
-
-    def received(self, name):
-        return [(e[2], e[3], bytes(e[4])) for e in self.rec(name).of(EV_RECEIVED)]
-
-    def done(self, name, rid):
-        return lambda: self.rec(name).final(rid) is not None
-
-    def up(self):
-        return self.run(6000, until=lambda: all(d.ready(self.clk()) for d in self.drivers.values()))
+    def __init__(self, **kw):
+        modemnet.Net.__init__(self, BenthosDriver, BenthosEmulator, broadcast=255, **kw)
 
 
 def test_unicast_with_link_ack_broadcast_and_names():
@@ -590,23 +521,14 @@ def test_ranging_reports_the_distance():
 def test_mtu_violation_is_refused_by_the_link():
     net = Net()
     assert net.up()
-    link = net.nodes["buoy"].links["acoustic"]
-    assert not link.request(net.clk(), 9, "diver", bytes(63), 60)
-    assert net.rec("buoy").statuses(9) == [FAILED] and "MTU" in net.rec("buoy").reasons(9)[0]
-    r = net.send("buoy", "diver", bytes(range(62)), ack=True)  # the largest that fits
-    assert net.run(12000, until=net.done("buoy", r))
-    assert net.rec("buoy").final(r) == DELIVERED
+    modemnet.check_mtu(net, 62)
     assert net.received("diver") == [("buoy", "diver", bytes(range(62)))]
 
 
 def test_absent_destination_fails_without_an_ack():
     net = Net(link_opts={"max_retries": 1})
     assert net.up()
-    r = net.send("buoy", "ghost", b"anyone?", ack=True)
-    assert net.run(30000, until=net.done("buoy", r))
-    rec = net.rec("buoy")
-    assert rec.final(r) == FAILED and rec.reasons(r)[-1] == "no acknowledgement"
-    assert rec.statuses(r).count(TRANSMITTING) == 2  # retried once
+    modemnet.check_absent(net, "no acknowledgement")
     # the diver's modem heard it (@RcvAll=Ena); its link dropped it
     assert net.nodes["diver"].links["acoustic"].stats["rx_not_for_us"] == 2
 
@@ -616,24 +538,7 @@ def faulted(fault, what, where="buoy", **kw):
     # `where`'s emulator; returns the net and the request id.
     net = Net()
     assert net.up()
-    getattr(net.emus[where], fault)(what, **kw)
-    r = net.send("buoy", "diver", b"through faults", ack=True)
-    assert net.run(40000, until=net.done("buoy", r))
-    net.run(3000)
-    return net, r
-
-
-def check_recovered(net, r, reason=None):
-    rec = net.rec("buoy")
-    assert rec.final(r) == DELIVERED, rec.reasons(r)
-    if reason is not None:
-        assert any(reason in x for x in rec.reasons(r)), rec.reasons(r)
-    # delivered to the application once, even when the modem sent it twice
-    assert net.received("diver") == [("buoy", "diver", b"through faults")]
-    r2 = net.send("buoy", "diver", b"and after", ack=True)
-    assert net.run(12000, until=net.done("buoy", r2))
-    assert rec.final(r2) == DELIVERED
-    check_exactly_one_final(rec, [r, r2])
+    return net, modemnet.faulted(net, fault, what, where, **kw)
 
 
 def test_noise_bytes_on_the_line():
@@ -694,11 +599,7 @@ def test_reply_that_never_comes():
 def reboot_mid_transfer(after_ms, emu_opts=None):
     net = Net(emu_opts=emu_opts)
     assert net.up()
-    r = net.send("buoy", "diver", b"through faults", ack=True)
-    net.run(after_ms)
-    net.emus["buoy"].reboot(net.clk())
-    assert net.run(40000, until=net.done("buoy", r))
-    net.run(2000)
+    r = modemnet.reboot_mid_transfer(net, after_ms)
     assert net.drivers["buoy"].stats["reboots"] == 1
     return net, r
 
@@ -719,59 +620,16 @@ def test_silent_reboot_is_found():
 def test_a_modem_that_stops_answering_goes_down_and_comes_back():
     net = Net(link_opts={"max_retries": 0})
     assert net.up()
-    drv = net.drivers["buoy"]
-    seen = []
-    orig = drv.take_events
-
-    def spy():
-        ev = orig()
-        seen.extend(ev)
-        return ev
-
-    drv.take_events = spy
-    net.emus["buoy"].swallow_next(None, count=6)
-    r = net.send("buoy", "diver", b"one", ack=True)
-    assert net.run(30000, until=lambda: (EV_DRIVER_DOWN, "modem not answering") in seen)
-    assert net.run(30000, until=lambda: seen[-1] == (EV_DRIVER_UP,))
-    assert net.rec("buoy").final(r) == FAILED
-    r2 = net.send("buoy", "diver", b"two", ack=True)
-    assert net.run(12000, until=net.done("buoy", r2))
-    assert net.rec("buoy").final(r2) == DELIVERED
+    modemnet.check_down_and_up(net, 30000, 30000)
 
 
 def test_every_request_ends_once_under_mixed_faults():
-    from acomm.prng import Prng
-
     net = Net(start=TICKS_MAX - 20000, link_opts={"queue_capacity": 6})
     assert net.up()
-    rng = Prng(5)
-    ids = {"buoy": [], "diver": []}
-    faults = ("corrupt_next", "truncate_next", "swallow_next")
-    for i in range(50):
-        src = "buoy" if rng.chance(0.5) else "diver"
-        dst = BROADCAST if rng.chance(0.2) else ("diver" if src == "buoy" else "buoy")
-        ids[src].append(net.send(src, dst, b"m%d" % i, ack=rng.chance(0.7), life=rng.range(5, 40)))
-        emu = net.emus["buoy" if rng.chance(0.5) else "diver"]
-        if rng.chance(0.3):
-            getattr(emu, faults[rng.below(3)])(None)
-        if rng.chance(0.2):
-            emu.inject_noise(rng.bytes(rng.range(1, 40)))
-        if i == 25:
-            net.emus["diver"].reboot(net.clk())
-        net.run(3000)
-    net.run(60000)
-    finals = {}
-    for name in ("buoy", "diver"):
-        rec = net.rec(name)
-        check_exactly_one_final(rec, ids[name])
-        assert not net.nodes[name].links["acoustic"]._active
-        for rid in ids[name]:
-            finals[rec.final(rid)] = finals.get(rec.final(rid), 0) + 1
+    finals = modemnet.mixed_faults(net, 50, 3000, 25)
     assert finals.get(DELIVERED, 0) >= 15 and finals.get(TRANSMITTED), finals
     # and the network still works afterwards
-    r = net.send("diver", "buoy", b"still here", ack=True)
-    assert net.run(15000, until=net.done("diver", r))
-    assert net.rec("diver").final(r) == DELIVERED
+    modemnet.check_still_works(net)
 
 
 def test_driver_never_raises_on_random_input():

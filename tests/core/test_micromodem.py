@@ -3,7 +3,6 @@
 # included), then two Nodes whose Links drive MicroModemDrivers over FakeUART
 # lines to emulated modems on one acoustic medium, through every fault mode.
 from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
-from acomm.clock import ManualClock
 from acomm.compat import TICKS_MAX
 from acomm.drivers import micromodem_nmea as nm
 from acomm.drivers.micromodem import MicroModemDriver
@@ -19,7 +18,6 @@ from acomm.events import (
     EV_DRIVER_UP,
     EV_RANGE,
     EV_RANGE_RECEIVED,
-    EV_RECEIVED,
     EV_RX,
     EV_TX_DONE,
     EV_TX_FAILED,
@@ -29,14 +27,12 @@ from acomm.events import (
     TRANSMITTING,
     WAITING,
 )
-from acomm.fakeuart import uart_pair
 from acomm.link import BROADCAST
-from acomm.names import AddressMap
-from acomm.node import Node
 from acomm_sim.medium import Medium
 from acomm_sim.micromodem import MicroModemEmulator
 from checks import raises
-from linkcheck import Recorder, check_exactly_one_final
+import modemnet
+from linkcheck import check_exactly_one_final
 
 # section 3.7, every line with its checksum
 CYC = b"$CCCYC,0,1,2,1,1,1*5B\r\n"
@@ -289,15 +285,7 @@ def test_advert_mini_packet_mapping():
 
 
 # -- byte-exact: the emulator ----------------------------------------------------------
-def run_emulators(emus, t0, t1, step=10):
-    out = [bytearray() for _ in emus]
-    t = t0
-    while t <= t1:
-        for i, e in enumerate(emus):
-            e.poll(t)
-            out[i] += e.take_output()
-        t += step
-    return [bytes(o) for o in out]
+run_emulators = modemnet.run_emulators
 
 
 def test_emulator_answers_like_the_reference():
@@ -363,69 +351,16 @@ def test_emulator_errors_queries_and_timeouts():
 BUOY, DIVER = ("buoy", 1), ("diver", 2)
 
 
-class Net:
+class Net(modemnet.Net):
     # Each node's Link drives a MicroModemDriver over a FakeUART line whose
     # other end the test pumps into that node's emulated modem. Node ids are
     # the modem addresses (the Link's default identity address map) unless
     # addr_offset moves the node ids away from them.
-    def __init__(self, start=0, distance=100.0, emu_opts=None, link_opts=None, drv_opts=None, addr_offset=0):
-        self.clk = ManualClock(start)
-        self.medium = Medium(default_distance=distance)
-        self.nodes = {}
-        self.emus = {}
-        self.drivers = {}
-        self.ends = {}
-        stations = (BUOY, DIVER, ("ghost", 5))
-        for name, addr in (BUOY, DIVER):
-            a, b = uart_pair(clock=self.clk)
-            node = Node(name, addr + addr_offset, self.clk, listener=Recorder())
-            opts = {"advert_period_ms": 600000}
-            if addr_offset:
-                amap = AddressMap(False, 0)
-                for other, oaddr in stations:
-                    amap.set(oaddr + addr_offset, oaddr)
-                opts["addr_map"] = amap
-            for other, oaddr in stations:
-                node.names.add(other, oaddr + addr_offset)
-            drv = MicroModemDriver(addr, **(drv_opts or {}))
-            opts.update(link_opts or {})
-            node.add_link("acoustic", drv, a, **opts)
-            self.nodes[name] = node
-            self.drivers[name] = drv
-            self.emus[name] = MicroModemEmulator(self.medium, addr, now=start, **(emu_opts or {}))
-            self.ends[name] = b
-
-    def run(self, ms, step=20, until=None):
-        clk = self.clk
-        for _ in range(ms // step):
-            now = clk()
-            for name, node in self.nodes.items():
-                node.step(now)
-                e = self.emus[name]
-                end = self.ends[name]
-                data = end.read()
-                if data:
-                    e.feed(now, data)
-                e.poll(now)
-                out = e.take_output()
-                if out:
-                    end.write(out)
-            clk.advance(step)
-            if until is not None and until():
-                return True
-        return until is None
-
-    def send(self, src, dst, data, ack=False, life=60):
-        return self.nodes[src].send("acoustic", dst, data, life, 2, ack)
-
-    def rec(self, name):
-        return self.nodes[name].listener
-
-    def received(self, name):
-        return [(e[2], e[3], bytes(e[4])) for e in self.rec(name).of(EV_RECEIVED)]
-
-    def done(self, name, rid):
-        return lambda: self.rec(name).final(rid) is not None
+    def __init__(self, addr_offset=0, **kw):
+        stations = tuple((name, addr + addr_offset, addr) for name, addr in (BUOY, DIVER))
+        broadcast = 0 if addr_offset else None
+        ghost = ("ghost", 5 + addr_offset, 5)
+        modemnet.Net.__init__(self, MicroModemDriver, MicroModemEmulator, stations, broadcast=broadcast, ghost=ghost, **kw)
 
 
 def test_unicast_with_ack_broadcast_and_names():
@@ -479,44 +414,23 @@ def test_ranging_reports_the_distance():
 def test_mtu_violation_is_refused_by_the_link():
     net = Net(drv_opts={"rate": 0}, emu_opts={"rate": 0})
     net.run(5000)
-    assert not net.nodes["buoy"].links["acoustic"].request(net.clk(), 9, "diver", bytes(32), 60)
-    assert net.rec("buoy").statuses(9) == [FAILED] and "MTU" in net.rec("buoy").reasons(9)[0]
-    r = net.send("buoy", "diver", bytes(range(31)), ack=True)  # the largest that fits at rate 0
-    assert net.run(20000, until=net.done("buoy", r))
-    assert net.rec("buoy").final(r) == DELIVERED
+    modemnet.check_mtu(net, 31, within_ms=20000)  # the largest that fits at rate 0
 
 
 def test_absent_destination_fails_with_the_modem_reason():
     net = Net(link_opts={"max_retries": 1})
     net.run(5000)
-    r = net.send("buoy", "ghost", b"anyone?", ack=True)
-    assert net.run(30000, until=net.done("buoy", r))
-    rec = net.rec("buoy")
-    assert rec.final(r) == FAILED and rec.reasons(r)[-1] == "no acknowledgement"
-    assert rec.statuses(r).count(TRANSMITTING) == 2  # retried once
+    modemnet.check_absent(net, "no acknowledgement")
 
 
 def faulted(fault, name=None, where="buoy", **kw):
     net = Net()
     net.run(5000)
-    getattr(net.emus[where], fault)(name, **kw)
-    r = net.send("buoy", "diver", b"through faults", ack=True)
-    assert net.run(60000, until=net.done("buoy", r))
-    net.run(3000)
-    return net, r
+    return net, modemnet.faulted(net, fault, name, where, within_ms=60000, **kw)
 
 
 def check_recovered(net, r, reason=None):
-    rec = net.rec("buoy")
-    assert rec.final(r) == DELIVERED, rec.reasons(r)
-    if reason is not None:
-        assert any(reason in x for x in rec.reasons(r)), rec.reasons(r)
-    # delivered to the application once, even when the modem sent it twice
-    assert net.received("diver") == [("buoy", "diver", b"through faults")]
-    r2 = net.send("buoy", "diver", b"and after", ack=True)
-    assert net.run(15000, until=net.done("buoy", r2))
-    assert rec.final(r2) == DELIVERED
-    check_exactly_one_final(rec, [r, r2])
+    modemnet.check_recovered(net, r, reason, within_ms=15000)
 
 
 def test_noise_on_the_line():
@@ -560,11 +474,7 @@ def test_reply_that_never_comes():
 def test_reboot_banner_mid_transfer():
     net = Net()
     net.run(5000)
-    r = net.send("buoy", "diver", b"through faults", ack=True)
-    net.run(800)  # on the air now
-    net.emus["buoy"].reboot(net.clk())
-    assert net.run(40000, until=net.done("buoy", r))
-    net.run(2000)
+    r = modemnet.reboot_mid_transfer(net, 800)  # on the air by then
     assert net.drivers["buoy"].stats["reboots"] == 2  # the power-up banner, then the fault
     check_recovered(net, r, "modem rebooted")
 
@@ -572,58 +482,16 @@ def test_reboot_banner_mid_transfer():
 def test_a_modem_that_stops_answering_goes_down_and_comes_back():
     net = Net(link_opts={"max_retries": 0})
     net.run(5000)
-    drv = net.drivers["buoy"]
-    seen = []
-    orig = drv.take_events
-
-    def spy():
-        ev = orig()
-        seen.extend(ev)
-        return ev
-
-    drv.take_events = spy
-    net.emus["buoy"].swallow_next(None, count=6)
-    r = net.send("buoy", "diver", b"one", ack=True)
-    assert net.run(40000, until=lambda: (EV_DRIVER_DOWN, "modem not answering") in seen)
-    assert net.run(30000, until=lambda: seen[-1] == (EV_DRIVER_UP,))
-    assert net.rec("buoy").final(r) == FAILED and net.rec("buoy").reasons(r)[-1] == "no answer to $CCCYC"
-    r2 = net.send("buoy", "diver", b"two", ack=True)
-    assert net.run(15000, until=net.done("buoy", r2))
-    assert net.rec("buoy").final(r2) == DELIVERED
+    r = modemnet.check_down_and_up(net, 40000, 30000, within_ms=15000)
+    assert net.rec("buoy").reasons(r)[-1] == "no answer to $CCCYC"
 
 
 def test_every_request_ends_once_under_mixed_faults():
-    from acomm.prng import Prng
-
     net = Net(start=TICKS_MAX - 20000, link_opts={"queue_capacity": 6})
     net.run(5000)
-    rng = Prng(5)
-    ids = {"buoy": [], "diver": []}
-    faults = ("corrupt_next", "truncate_next", "swallow_next")
-    for i in range(40):
-        src = "buoy" if rng.chance(0.5) else "diver"
-        dst = BROADCAST if rng.chance(0.2) else ("diver" if src == "buoy" else "buoy")
-        ids[src].append(net.send(src, dst, b"m%d" % i, ack=rng.chance(0.7), life=rng.range(10, 60)))
-        emu = net.emus["buoy" if rng.chance(0.5) else "diver"]
-        if rng.chance(0.3):
-            getattr(emu, faults[rng.below(3)])(None)
-        if rng.chance(0.2):
-            emu.inject_noise(rng.bytes(rng.range(1, 40)))
-        if i == 20:
-            net.emus["diver"].reboot(net.clk())
-        net.run(4000)
-    net.run(60000)
-    finals = {}
-    for name in ("buoy", "diver"):
-        rec = net.rec(name)
-        check_exactly_one_final(rec, ids[name])
-        assert not net.nodes[name].links["acoustic"]._active
-        for rid in ids[name]:
-            finals[rec.final(rid)] = finals.get(rec.final(rid), 0) + 1
+    finals = modemnet.mixed_faults(net, 40, 4000, 20, life=(10, 60))
     assert finals.get(DELIVERED, 0) >= 10 and finals.get(TRANSMITTED) and finals.get(FAILED), finals
-    r = net.send("diver", "buoy", b"still here", ack=True)
-    assert net.run(15000, until=net.done("diver", r))
-    assert net.rec("diver").final(r) == DELIVERED
+    modemnet.check_still_works(net)
 
 
 def test_driver_never_raises_on_random_input():

@@ -1,108 +1,34 @@
 # The EvoLogics driver against emulated S2C modems over real pseudo-terminals
 # opened with pyserial, on real time: each Node's link drives its modem
 # through one end of a PtyPair, and the emulator answers on the other end,
-# as a modem on a serial line would. CPython only.
+# as a modem on a serial line would. CPython only (the harness, and the skip
+# where pyserial or ptys are missing, are ptynet's).
 #
 # The acoustic timing is scaled down (short packets, fast rates, a short
 # range limit) so the test is quick; driver and emulator are given the same
 # figures. Every wait is bounded; no timing is asserted, only outcomes.
 
-import sys
-import time
-
+import ptynet  # first: it skips this module where pyserial or ptys are missing
 import pytest
+from ptynet import all_ready, run
 
-serial = pytest.importorskip("serial")
-if not sys.platform.startswith("linux") and sys.platform != "darwin":
-    pytest.skip("needs POSIX pseudo-terminals", allow_module_level=True)
+from acomm.compat import ticks_ms
+from acomm.drivers.evologics import EvologicsDriver
+from acomm.events import DELIVERED, TRANSMITTED
+from acomm.link import BROADCAST
+from acomm_sim.evologics import EvologicsEmulator
 
-from acomm.compat import ticks_ms  # noqa: E402
-from acomm.drivers.evologics import EvologicsDriver  # noqa: E402
-from acomm.events import (  # noqa: E402
-    DELIVERED,
-    EV_RANGE_RECEIVED,
-    EV_RECEIVED,
-    EV_STATUS,
-    TRANSMITTED,
-    is_final,
-)
-from acomm.link import BROADCAST  # noqa: E402
-from acomm.node import Node  # noqa: E402
-from acomm_cpython.streams import PtyPair, open_serial  # noqa: E402
-from acomm_sim.evologics import EvologicsEmulator  # noqa: E402
-from acomm_sim.medium import Medium  # noqa: E402
-
-BAUD = 115200
-TIMEOUT_S = 10
 FAST = {"packet_ms": 30, "im_bitrate": 9600, "burst_bitrate": 40000, "turnaround_ms": 20, "max_range_m": 300}
-
-
-class Modem:
-    # One node, its pty pair, and the emulated modem on the far end.
-    def __init__(self, medium, name, node_id, addr, peers):
-        self.events = []
-        self.ptys = PtyPair()
-        self.host = open_serial(self.ptys.path_a, BAUD)
-        self.port = open_serial(self.ptys.path_b, BAUD)  # the modem's side
-        self.emu = EvologicsEmulator(medium, addr, now=ticks_ms(), **FAST)
-        self.node = Node(name, node_id, listener=self.events.append)
-        for other, oid in peers:
-            self.node.names.add(other, oid)
-        self.driver = EvologicsDriver(addr, margin_ms=1000, cmd_timeout_ms=2000, **FAST)
-        self.link = self.node.add_link("acoustic", self.driver, self.host, advert_period_ms=600000)
-
-    def step(self):
-        self.node.step()
-        now = ticks_ms()
-        data = self.port.read(4096)
-        if data:
-            self.emu.feed(now, data)
-        self.emu.poll(now)
-        out = self.emu.take_output()
-        if out:
-            self.port.write(out)
-
-    def final(self, rid):
-        for ev in self.events:
-            if ev[0] == EV_STATUS and ev[2] == rid and is_final(ev[3]):
-                return ev[3]
-        return None
-
-    def received(self):
-        return [(e[2], e[3], e[4]) for e in self.events if e[0] == EV_RECEIVED]
-
-    def close(self):
-        self.host.close()
-        self.port.close()
-        self.ptys.close()
 
 
 @pytest.fixture
 def pair():
-    medium = Medium(default_distance=120.0)
-    peers = (("buoy", 1), ("diver", 2))
-    a = Modem(medium, "buoy", 1, 1, peers)
-    b = Modem(medium, "diver", 2, 2, peers)
-    yield a, b
-    a.close()
-    b.close()
-    assert not a.ptys.running and not b.ptys.running
-
-
-def run(ends, until):
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < TIMEOUT_S:
-        for e in ends:
-            e.step()
-        if until():
-            return True
-        time.sleep(0.002)
-    return False
+    yield from ptynet.pair(EvologicsDriver, EvologicsEmulator, dict(FAST, margin_ms=1000, cmd_timeout_ms=2000), FAST)
 
 
 def test_unicast_broadcast_and_ranging_over_ptys(pair):
     a, b = pair
-    assert run(pair, lambda: a.driver.ready(ticks_ms()) and b.driver.ready(ticks_ms()))
+    assert run(pair, all_ready(pair))
     rid = a.node.send("acoustic", "diver", b"hello over a pty", 30, 2, ack=True)
     assert run(pair, lambda: a.final(rid) is not None)
     assert a.final(rid) == DELIVERED
@@ -117,7 +43,7 @@ def test_unicast_broadcast_and_ranging_over_ptys(pair):
     assert b.final(rid) == TRANSMITTED and a.received() == [("diver", BROADCAST, b"all surface")]
     assert a.link.range(ticks_ms(), 500, ["diver"], 30)
     assert run(pair, lambda: a.final(500) is not None)
-    r = [e for e in a.events if e[0] == EV_RANGE_RECEIVED][-1]
+    r = a.last_range()
     assert r[3] == ["diver"] and r[4] == [120.0]
     assert a.final(500) == DELIVERED
     # the host side really spoke the protocol: no damaged lines either way

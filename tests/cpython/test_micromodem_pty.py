@@ -1,111 +1,49 @@
 # The Micro-Modem driver against emulated modems over real pseudo-terminals
 # opened with pyserial, on real time: each Node's link drives its modem
 # through one end of a PtyPair, and the emulator answers on the other end,
-# as a modem on a serial port would. CPython only.
+# as a modem on a serial port would. CPython only (the harness, and the skip
+# where pyserial or ptys are missing, are ptynet's).
 #
 # The acoustic timing is scaled down to a tenth (air_scale) and the driver's
 # waits shortened so the test is quick; driver and emulator share the
 # figures. Every wait is bounded; no timing is asserted, only outcomes.
 
-import sys
-import time
-
+import ptynet  # first: it skips this module where pyserial or ptys are missing
 import pytest
+from ptynet import all_ready, run
 
-serial = pytest.importorskip("serial")
-if not sys.platform.startswith("linux") and sys.platform != "darwin":
-    pytest.skip("needs POSIX pseudo-terminals", allow_module_level=True)
-
-from acomm.compat import ticks_ms  # noqa: E402
-from acomm.drivers.micromodem import MicroModemDriver  # noqa: E402
-from acomm.events import DELIVERED, EV_RANGE_RECEIVED, EV_RECEIVED, EV_STATUS, TRANSMITTED, is_final  # noqa: E402
-from acomm.link import BROADCAST  # noqa: E402
-from acomm.node import Node  # noqa: E402
-from acomm_cpython.streams import PtyPair, open_serial  # noqa: E402
-from acomm_sim.medium import Medium  # noqa: E402
-from acomm_sim.micromodem import MicroModemEmulator  # noqa: E402
+from acomm.compat import ticks_ms
+from acomm.drivers.micromodem import MicroModemDriver
+from acomm.events import DELIVERED, TRANSMITTED
+from acomm.link import BROADCAST
+from acomm_sim.micromodem import MicroModemEmulator
 
 BAUD = 19200  # the modem's default
-TIMEOUT_S = 10
 SHARED = {"air_scale": 0.1, "max_range_m": 300}
 DRIVER = dict(SHARED, modem_wait_ms=1000, margin_ms=500, reboot_wait_ms=200, retry_ms=500)
 EMULATOR = dict(SHARED, data_timeout_ms=1000)
 
 
-class Modem:
-    # One node, its pty pair, and the emulated modem on the far end.
-    def __init__(self, medium, name, addr, peers):
-        self.events = []
-        self.ptys = PtyPair()
-        self.host = open_serial(self.ptys.path_a, BAUD)
-        self.port = open_serial(self.ptys.path_b, BAUD)  # the modem's side
-        self.emu = MicroModemEmulator(medium, addr, now=ticks_ms(), **EMULATOR)
-        self.node = Node(name, addr, listener=self.events.append)
-        for other, oid in peers:
-            self.node.names.add(other, oid)
-        self.driver = MicroModemDriver(addr, **DRIVER)
-        self.link = self.node.add_link("acoustic", self.driver, self.host, advert_period_ms=600000)
-
-    def step(self):
-        self.node.step()
-        now = ticks_ms()
-        data = self.port.read(4096)
-        if data:
-            self.emu.feed(now, data)
-        self.emu.poll(now)
-        out = self.emu.take_output()
-        if out:
-            self.port.write(out)
-
-    def final(self, rid):
-        for ev in self.events:
-            if ev[0] == EV_STATUS and ev[2] == rid and is_final(ev[3]):
-                return ev[3]
-        return None
-
-    def close(self):
-        self.host.close()
-        self.port.close()
-        self.ptys.close()
-
-
 @pytest.fixture
 def pair():
-    medium = Medium(default_distance=120.0)
-    peers = (("buoy", 1), ("diver", 2))
-    a = Modem(medium, "buoy", 1, peers)
-    b = Modem(medium, "diver", 2, peers)
-    yield a, b
-    a.close()
-    b.close()
-    assert not a.ptys.running and not b.ptys.running
-
-
-def run(ends, until):
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < TIMEOUT_S:
-        for e in ends:
-            e.step()
-        if until():
-            return True
-        time.sleep(0.002)
-    return False
+    # node ids are the modem addresses
+    yield from ptynet.pair(MicroModemDriver, MicroModemEmulator, DRIVER, EMULATOR, baud=BAUD)
 
 
 def test_unicast_broadcast_and_ping_over_ptys(pair):
     a, b = pair
-    assert run(pair, lambda: a.driver.ready(ticks_ms()) and b.driver.ready(ticks_ms()))
+    assert run(pair, all_ready(pair))
     rid = a.node.send("acoustic", "diver", b"hello over a pty", 30, 2, ack=True)
     assert run(pair, lambda: a.final(rid) is not None)
     assert a.final(rid) == DELIVERED
-    assert [(e[2], e[3], e[4]) for e in b.events if e[0] == EV_RECEIVED] == [("buoy", "diver", b"hello over a pty")]
+    assert b.received() == [("buoy", "diver", b"hello over a pty")]
     rid = b.node.send("acoustic", BROADCAST, b"to everyone", 30, 2)
-    assert run(pair, lambda: b.final(rid) is not None and [e for e in a.events if e[0] == EV_RECEIVED])
+    assert run(pair, lambda: b.final(rid) is not None and a.received())
     assert b.final(rid) == TRANSMITTED
-    assert [(e[2], e[3], e[4]) for e in a.events if e[0] == EV_RECEIVED] == [("diver", BROADCAST, b"to everyone")]
+    assert a.received() == [("diver", BROADCAST, b"to everyone")]
     assert a.link.range(ticks_ms(), 500, ["diver"], 30)
     assert run(pair, lambda: a.final(500) is not None)
-    r = [e for e in a.events if e[0] == EV_RANGE_RECEIVED][-1]
+    r = a.last_range()
     assert r[3] == ["diver"] and abs(r[4][0] - 120.0) < 1.0
     assert a.final(500) == DELIVERED
     # the host side really spoke the protocol: no damaged lines either way

@@ -1,104 +1,40 @@
 # The SeaTrac driver against emulated beacons over real pseudo-terminals
 # opened with pyserial, on real time: each Node's link drives its beacon
 # through one end of a PtyPair, and the emulator answers on the other end,
-# exactly as a beacon behind a USB-serial adapter would. CPython only.
+# exactly as a beacon behind a USB-serial adapter would. CPython only (the
+# harness, and the skip where pyserial or ptys are missing, are ptynet's).
 #
 # The acoustic timing is scaled down (100 ms packets) so the test is quick;
 # driver and emulator are given the same figures. Every wait is bounded; no
 # timing is asserted, only outcomes.
 
-import sys
-import time
-
+import ptynet  # first: it skips this module where pyserial or ptys are missing
 import pytest
+from ptynet import all_ready, run
 
-serial = pytest.importorskip("serial")
-if not sys.platform.startswith("linux") and sys.platform != "darwin":
-    pytest.skip("needs POSIX pseudo-terminals", allow_module_level=True)
+from acomm.compat import ticks_ms
+from acomm.drivers.seatrac import SeatracDriver
+from acomm.events import DELIVERED
+from acomm_sim.seatrac import SeatracEmulator
 
-from acomm.compat import ticks_ms  # noqa: E402
-from acomm.drivers.seatrac import SeatracDriver  # noqa: E402
-from acomm.events import DELIVERED, EV_RANGE_RECEIVED, EV_RECEIVED, EV_STATUS, is_final  # noqa: E402
-from acomm.node import Node  # noqa: E402
-from acomm_cpython.streams import PtyPair, open_serial  # noqa: E402
-from acomm_sim.medium import Medium  # noqa: E402
-from acomm_sim.seatrac import SeatracEmulator  # noqa: E402
-
-BAUD = 115200
-TIMEOUT_S = 10
 FAST = {"packet_ms": 100, "byte_ms": 8, "turnaround_ms": 50}
-
-
-class Beacon:
-    # One node, its pty pair, and the emulated beacon on the far end.
-    def __init__(self, medium, name, node_id, beacon_id, peers):
-        self.events = []
-        self.ptys = PtyPair()
-        self.host = open_serial(self.ptys.path_a, BAUD)
-        self.port = open_serial(self.ptys.path_b, BAUD)  # the beacon's side
-        self.emu = SeatracEmulator(medium, beacon_id, now=ticks_ms(), **FAST)
-        self.node = Node(name, node_id, listener=self.events.append)
-        for other, oid in peers:
-            self.node.names.add(other, oid)
-        self.driver = SeatracDriver(beacon_id, margin_ms=1000, **FAST)
-        self.link = self.node.add_link("acoustic", self.driver, self.host, advert_period_ms=600000)
-
-    def step(self):
-        self.node.step()
-        now = ticks_ms()
-        data = self.port.read(4096)
-        if data:
-            self.emu.feed(now, data)
-        self.emu.poll(now)
-        out = self.emu.take_output()
-        if out:
-            self.port.write(out)
-
-    def final(self, rid):
-        for ev in self.events:
-            if ev[0] == EV_STATUS and ev[2] == rid and is_final(ev[3]):
-                return ev[3]
-        return None
-
-    def close(self):
-        self.host.close()
-        self.port.close()
-        self.ptys.close()
 
 
 @pytest.fixture
 def pair():
-    medium = Medium(default_distance=120.0)
-    peers = (("buoy", 1), ("diver", 2))
-    a = Beacon(medium, "buoy", 1, 1, peers)
-    b = Beacon(medium, "diver", 2, 2, peers)
-    yield a, b
-    a.close()
-    b.close()
-    assert not a.ptys.running and not b.ptys.running
-
-
-def run(ends, until):
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < TIMEOUT_S:
-        for e in ends:
-            e.step()
-        if until():
-            return True
-        time.sleep(0.002)
-    return False
+    yield from ptynet.pair(SeatracDriver, SeatracEmulator, dict(FAST, margin_ms=1000), FAST)
 
 
 def test_unicast_with_ack_and_ping_over_ptys(pair):
     a, b = pair
-    assert run(pair, lambda: a.driver.ready(ticks_ms()) and b.driver.ready(ticks_ms()) and a.driver.caps.model == "X150")
+    assert run(pair, lambda: all_ready(pair)() and a.driver.caps.model == "X150")
     rid = a.node.send("acoustic", "diver", b"hello over a pty", 30, 2, ack=True)
     assert run(pair, lambda: a.final(rid) is not None)
     assert a.final(rid) == DELIVERED
-    assert [(e[2], e[3], e[4]) for e in b.events if e[0] == EV_RECEIVED] == [("buoy", "diver", b"hello over a pty")]
+    assert b.received() == [("buoy", "diver", b"hello over a pty")]
     assert a.link.range(ticks_ms(), 500, ["diver"], 30)
     assert run(pair, lambda: a.final(500) is not None)
-    r = [e for e in a.events if e[0] == EV_RANGE_RECEIVED][-1]
+    r = a.last_range()
     assert r[3] == ["diver"] and r[4] == [120.0]
     assert a.final(500) == DELIVERED
     # the host side really spoke the protocol: no damaged lines either way
