@@ -18,13 +18,13 @@
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX
 from . import benthos_wire as w
-from .base import SansIO
 from .benthos_answers import C_AT, C_ATO, C_ESCAPE, C_PAYLOAD, C_QUERY, C_RANGE, C_SET, INFO, answer, stray
 from .benthos_config import BenthosConfig, setup_steps
 from .benthos_lines import LineSplitter, RxBlock
 from .benthos_slot import IDLE, K_DATA, K_PING, QUEUED, Slot
+from .slotbase import SlotDriver
 
 _S_START = const(0)
 _S_CONFIG = const(1)
@@ -40,7 +40,7 @@ _O_SLOT = const(1)
 _O_PROBE = const(2)
 
 
-class BenthosDriver(SansIO):
+class BenthosDriver(SlotDriver):
     def __init__(
         self,
         address=None,
@@ -63,7 +63,7 @@ class BenthosDriver(SansIO):
         down_after=3,
         banner_marks=("Teledyne Benthos", "Benthos ATM"),
     ):
-        SansIO.__init__(self)
+        SlotDriver.__init__(self)
         if tx_rate not in w.RATES:
             raise AcommError("Benthos @TxRate codes are 2..13, not %r" % (tx_rate,))
         if not 1 <= mtu <= w.MAX_FRAME:
@@ -129,7 +129,6 @@ class BenthosDriver(SansIO):
         self._silent = 0
         self._probe_cmd = False  # the keepalive expects command mode
         self._now = 0
-        self._h = 0
 
     # -- timing model ------------------------------------------------------------
     def airtime_ms(self, nbytes):
@@ -155,22 +154,11 @@ class BenthosDriver(SansIO):
 
     def ping(self, now, addr):
         # never raises: problems come back as EV_TX_FAILED for the handle
-        reason = None
         if not isinstance(addr, int) or not 0 <= addr <= w.MAX_ADDR or addr == self.address:
-            reason = "cannot range address %r" % (addr,)
-        elif not self.ready(now):
-            reason = "Benthos modem not ready"
-        if reason is not None:
-            self._h = (self._h + 1) & 0xFFFF
-            self._events.append((EV_TX_FAILED, self._h, reason))
-            return self._h
+            return self._refuse("cannot range address %r" % (addr,))
+        if not self.ready(now):
+            return self._refuse("Benthos modem not ready")
         return self._accept(now, K_PING, addr, b"")
-
-    def _accept(self, now, kind, addr, data):
-        self._h = (self._h + 1) & 0xFFFF
-        self.slot.accept(self._h, kind, addr, data)
-        self._pump(now)
-        return self._h
 
     def feed(self, now, data):
         self._now = now

@@ -22,9 +22,8 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_RANGE, EV_TX_DONE, EV_TX_FAILED
 from . import benthos_wire as w
+from .slotbase import IDLE, QUEUED, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
-IDLE = const(0)
-QUEUED = const(1)
 ADDR = const(2)
 CONNECT = const(3)
 FORWARD = const(4)
@@ -35,28 +34,14 @@ K_DATA = const(0)
 K_PING = const(1)
 
 
-class Slot:
+class Slot(SlotBase):
     def __init__(self, driver, cap):
-        self.d = driver
-        self.state = IDLE
-        self.kind = K_DATA
-        self.handle = 0
-        self.addr = 0
-        self.buf = bytearray(cap)
-        self.n = 0
-        self.done_at = None  # EV_TX_DONE due
+        SlotBase.__init__(self, driver, cap)
         self.free_at = None  # give up waiting for the prompt
 
     def accept(self, handle, kind, addr, data):
-        n = len(data)
-        self.buf[:n] = data
-        self.n = n
-        self.kind = kind
-        self.handle = handle
-        self.addr = addr
-        self.done_at = None
+        self._take(handle, kind, addr, data)
         self.free_at = None
-        self.state = QUEUED
 
     def start(self, now):
         # the modem is in command mode and the serial line is free

@@ -15,12 +15,12 @@
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_TX_FAILED
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP
 from . import evologics_rx as rx
 from . import evologics_wire as w
-from .base import SansIO
 from .evologics_config import EvologicsConfig
 from .evologics_slot import CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING, KIND_NAMES, PTIME, QUEUED, AcousticSlot
+from .slotbase import SlotDriver
 
 _S_START = const(0)
 _S_CONFIG = const(1)  # (re)configuring; also "down" while the modem is silent
@@ -32,7 +32,7 @@ C_PTIME = const(21)
 C_PROBE = const(22)
 C_CTRL = const(23)
 
-class EvologicsDriver(SansIO):
+class EvologicsDriver(SlotDriver):
     R_OK = 1
     R_ERROR = 2
     R_BUSY = 3
@@ -68,7 +68,7 @@ class EvologicsDriver(SansIO):
         retry_ms=2000,
         down_after=3,
     ):
-        SansIO.__init__(self)
+        SlotDriver.__init__(self)
         if address is not None and not 0 <= address <= 254:
             raise AcommError("EvoLogics addresses are 0..254, not %r" % (address,))
         if not 0 <= burst_mtu <= w.BURST_MAX or burst_mtu and burst_mtu <= w.IM_MAX:
@@ -132,7 +132,6 @@ class EvologicsDriver(SansIO):
         self._ctrl = False  # AT@CTRL due (someone took control)
         self._ptime = False  # AT?T due for last_ptime_us
         self._hold_until = None  # no acoustic command before this
-        self._h = 0
         self.slot = AcousticSlot(self, mtu)
 
     # -- timing model ------------------------------------------------------
@@ -181,22 +180,11 @@ class EvologicsDriver(SansIO):
     def ping(self, now, addr):
         # Never raises (the link calls it without a guard): problems come
         # back as EV_TX_FAILED for the returned handle.
-        reason = None
         if not isinstance(addr, int) or not 0 <= addr <= 254 or addr == self.broadcast_addr:
-            reason = "cannot range to address %r" % (addr,)
-        elif not self.ready(now):
-            reason = "EvoLogics modem not ready"
-        if reason is not None:
-            self._h = (self._h + 1) & 0xFFFF
-            self._events.append((EV_TX_FAILED, self._h, reason))
-            return self._h
+            return self._refuse("cannot range to address %r" % (addr,))
+        if not self.ready(now):
+            return self._refuse("EvoLogics modem not ready")
         return self._accept(now, K_PING, addr, self.ping_payload)
-
-    def _accept(self, now, kind, addr, data):
-        self._h = (self._h + 1) & 0xFFFF
-        self.slot.accept(self._h, kind, addr, data)
-        self._pump(now)
-        return self._h
 
     def feed(self, now, data):
         self._now = now

@@ -15,9 +15,8 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_DELIVERED, EV_RANGE, EV_TX_DONE, EV_TX_FAILED
+from .slotbase import IDLE, QUEUED, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
-IDLE = const(0)
-QUEUED = const(1)
 CMD = const(2)
 AIR = const(3)
 PTIME = const(4)
@@ -30,28 +29,15 @@ K_PING = const(3)
 KIND_NAMES = ("AT*SENDIM", "AT*SENDIM", "AT*SEND", "AT*SENDIM")
 
 
-class AcousticSlot:
+class AcousticSlot(SlotBase):
+    # done_at: the airtime estimate of our packet's end
     def __init__(self, driver, capacity):
-        self.d = driver  # timing model, event list, settings
-        self.state = IDLE
-        self.kind = K_IM
-        self.handle = 0
-        self.addr = 0
-        self.n = 0
-        self.buf = bytearray(capacity)
-        self.done_at = None  # airtime estimate of our packet's end
+        SlotBase.__init__(self, driver, capacity)
         self.deadline = None  # watchdog: stop waiting for the modem
         self.sent = False  # EV_TX_DONE given
 
     def accept(self, handle, kind, addr, data):
-        n = len(data)
-        self.buf[:n] = data
-        self.n = n
-        self.state = QUEUED
-        self.kind = kind
-        self.handle = handle
-        self.addr = addr
-        self.done_at = None
+        self._take(handle, kind, addr, data)
         self.deadline = None
         self.sent = False
 

@@ -14,20 +14,20 @@
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX
 from . import micromodem_nmea as nm
-from .base import SansIO
 from .micromodem_air import BITRATE, FRAME_BYTES, Airtime, check_rate
 from .micromodem_config import MicroModemConfig
 from .micromodem_mini import advert_to_mini, mini_to_advert
 from .micromodem_slot import ECHO, IDLE, K_DATA, K_MINI, K_PING, AcousticSlot
+from .slotbase import SlotDriver
 
 _S_START = const(0)
 _S_CONFIG = const(1)  # (re)configuring; also "down" while the modem is silent
 _S_UP = const(2)
 
 
-class MicroModemDriver(SansIO):
+class MicroModemDriver(SlotDriver):
     def __init__(
         self,
         address=None,
@@ -51,7 +51,7 @@ class MicroModemDriver(SansIO):
         clock=None,
         csum32=nm.CSUM32_VERIFY,
     ):
-        SansIO.__init__(self)
+        SlotDriver.__init__(self)
         check_rate(rate)
         if not 0 <= max_addr <= 254 or not 0 <= broadcast_addr <= max_addr:
             raise AcommError("Micro-Modem addresses: broadcast %r outside 0..%r" % (broadcast_addr, max_addr))
@@ -101,7 +101,6 @@ class MicroModemDriver(SansIO):
         self._cmd_line = b""
         self._cmd_deadline = 0
         self._cmd_tries = 0
-        self._h = 0
         self.slot = AcousticSlot(self)
 
     # -- timing model ------------------------------------------------------------
@@ -141,24 +140,23 @@ class MicroModemDriver(SansIO):
             raise EncodeError("Micro-Modem address %r outside 0..%d (or our own)" % (addr, self.max_addr))
         if addr == self.broadcast_addr:
             ack = False  # nobody acknowledges a broadcast
-        self._h = (self._h + 1) & 0xFFFF
+        h = self._handle()
         mini = advert_to_mini(data, self.own_addr) if (self.mini_adverts and not ack) else None
         if mini is not None:
-            self.slot.start(now, self._h, K_MINI, addr, mini=mini)
+            self.slot.start(now, h, K_MINI, addr, mini=mini)
         else:
-            self.slot.start(now, self._h, K_DATA, addr, bytes(data), ack)
-        return self._h
+            self.slot.start(now, h, K_DATA, addr, bytes(data), ack)
+        return h
 
     def ping(self, now, addr):
         # Never raises: problems come back as EV_TX_FAILED for the handle.
-        self._h = (self._h + 1) & 0xFFFF
         if not isinstance(addr, int) or not 0 <= addr <= self.max_addr or addr in (self.broadcast_addr, self.own_addr):
-            self._events.append((EV_TX_FAILED, self._h, "cannot ping address %r" % (addr,)))
-        elif not self.ready(now):
-            self._events.append((EV_TX_FAILED, self._h, "Micro-Modem not ready"))
-        else:
-            self.slot.start(now, self._h, K_PING, addr)
-        return self._h
+            return self._refuse("cannot ping address %r" % (addr,))
+        if not self.ready(now):
+            return self._refuse("Micro-Modem not ready")
+        h = self._handle()
+        self.slot.start(now, h, K_PING, addr)
+        return h
 
     def feed(self, now, data):
         self._now = now

@@ -15,11 +15,11 @@
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_FAILED
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX
 from . import seatrac_wire as w
 from .seatrac_config import SeatracConfig
 from .seatrac_slot import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot
-from .base import SansIO
+from .slotbase import SlotDriver
 
 _S_START = const(0)
 _S_CONFIG = const(1)  # (re)configuring; also "down" while the beacon is silent
@@ -36,7 +36,7 @@ _COMMANDS = (
 )
 
 
-class SeatracDriver(SansIO):
+class SeatracDriver(SlotDriver):
     def __init__(
         self,
         beacon_id=None,
@@ -62,7 +62,7 @@ class SeatracDriver(SansIO):
         reboot_wait_ms=2000,
         down_after=3,
     ):
-        SansIO.__init__(self)
+        SlotDriver.__init__(self)
         if not 1 <= mtu <= 31:
             raise AcommError("SeaTrac DAT payloads are 1..31 bytes, not %d" % mtu)
         if beacon_id is not None and not 1 <= beacon_id <= 15:
@@ -118,7 +118,6 @@ class SeatracDriver(SansIO):
         self._hold_until = None  # no acoustic command before this
         self._up_s = None  # beacon uptime (s) at self._up_at
         self._up_at = 0
-        self._h = 0
         self.slot = AcousticSlot(self)
 
     # -- timing model ------------------------------------------------------
@@ -156,20 +155,10 @@ class SeatracDriver(SansIO):
         # Never raises (the link calls it without a guard): problems come
         # back as EV_TX_FAILED for the returned handle.
         if not isinstance(addr, int) or not 1 <= addr <= 15:
-            self._h = (self._h + 1) & 0xFFFF
-            self._events.append((EV_TX_FAILED, self._h, "cannot ping beacon id %r" % (addr,)))
-            return self._h
+            return self._refuse("cannot ping beacon id %r" % (addr,))
         if not self.ready(now):
-            self._h = (self._h + 1) & 0xFFFF
-            self._events.append((EV_TX_FAILED, self._h, "SeaTrac not ready"))
-            return self._h
+            return self._refuse("SeaTrac not ready")
         return self._accept(now, K_PING, addr, self.ping_type, b"")
-
-    def _accept(self, now, kind, addr, mtype, data):
-        self._h = (self._h + 1) & 0xFFFF
-        self.slot.accept(self._h, kind, addr, mtype, data)
-        self._pump(now)
-        return self._h
 
     def feed(self, now, data):
         self._now = now

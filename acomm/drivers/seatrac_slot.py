@@ -13,9 +13,8 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_DELIVERED, EV_RANGE, EV_TX_DONE, EV_TX_FAILED
 from . import seatrac_wire as w
+from .slotbase import IDLE, QUEUED, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
-IDLE = const(0)
-QUEUED = const(1)
 CMD = const(2)
 AIR = const(3)
 
@@ -25,29 +24,15 @@ K_PING = const(1)
 REQ_TYPES = (w.MSG_REQ, w.MSG_REQU, w.MSG_REQX)
 
 
-class AcousticSlot:
+class AcousticSlot(SlotBase):
     def __init__(self, driver):
-        self.d = driver  # timing model and the event list
-        self.state = IDLE
-        self.kind = K_DAT
-        self.handle = 0
-        self.addr = 0
+        SlotBase.__init__(self, driver, 31)
         self.mtype = 0
-        self.n = 0
-        self.buf = bytearray(31)
-        self.done_at = None  # end of our packet: EV_TX_DONE
         self.deadline = None  # stop waiting for the beacon's reply
 
     def accept(self, handle, kind, addr, mtype, data):
-        n = len(data)
-        self.buf[:n] = data
-        self.n = n
-        self.state = QUEUED
-        self.kind = kind
-        self.handle = handle
-        self.addr = addr
+        self._take(handle, kind, addr, data)
         self.mtype = mtype
-        self.done_at = None
         self.deadline = None
 
     def build(self, msg):
