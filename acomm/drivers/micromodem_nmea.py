@@ -16,6 +16,7 @@
 
 from ..compat import const
 from ..crc import nmea_xor
+from .lineframe import SyncLines
 
 _HEX = b"0123456789ABCDEF"
 
@@ -98,74 +99,20 @@ JUNK_CHECKSUM = "checksum"  # the checksum does not match
 JUNK_FORMAT = "format"  # no checksum, or not 2/8 hex digits, or no name
 
 
-class LineReader:
-    # Cuts the stream into '$' sentences; each good one goes to
-    # sink.on_sentence(buf, n) with buf[:n] the text between '$' and '*'
+class LineReader(SyncLines):
+    # Cuts the stream into '$' sentences (the framing is lineframe's); each
+    # good one goes to sink.on_sentence(buf, n) with buf[:n] the text between '$' and '*'
     # (valid until the next feed). Damaged lines are dropped, counted in
     # self.junk and reported to sink.on_junk(kind). One preallocated buffer;
     # nothing is allocated per byte.
     def __init__(self, sink, cap=MAX_LINE, csum32=CSUM32_VERIFY, need_checksum=True):
-        self._sink = sink
-        self._buf = bytearray(cap)
-        self._n = 0
-        self._in = False
-        self._over = False
-        self._text = 0
+        SyncLines.__init__(self, 0x24, sink, cap, JUNK_TEXT, JUNK_TRUNCATED, JUNK_OVERLONG)
         self.csum32 = csum32
         self.need_checksum = need_checksum
         self.sentences = 0
-        self.junk = {}
 
-    def reset(self):
-        self._n = 0
-        self._in = False
-        self._over = False
-        self._text = 0
-
-    def _junk(self, kind):
-        self.junk[kind] = self.junk.get(kind, 0) + 1
-        self._sink.on_junk(kind)
-
-    def feed(self, data):
-        buf = self._buf
-        cap = len(buf)
-        n = self._n
-        for b in data:
-            if b == 0x24:  # '$'
-                if self._in:
-                    self._junk(JUNK_TRUNCATED)
-                elif self._text:
-                    self._junk(JUNK_TEXT)
-                self._in = True
-                self._over = False
-                self._text = 0
-                n = 0
-            elif b == 13 or b == 10:
-                if self._in:
-                    self._in = False
-                    self._n = n
-                    self._end()
-                    n = 0
-                elif self._text:
-                    self._text = 0
-                    self._junk(JUNK_TEXT)
-            elif self._in:
-                if n < cap:
-                    buf[n] = b
-                    n += 1
-                else:
-                    self._over = True
-            else:
-                self._text += 1
-        self._n = n
-
-    def _end(self):
-        if self._over:
-            self._over = False
-            self._junk(JUNK_OVERLONG)
-            return
-        buf = self._buf
-        n = self._n
+    def _end_line(self, n):
+        buf = self._line
         star = -1
         for i in range(n - 1, -1, -1):
             if buf[i] == 0x2A:  # '*'

@@ -12,6 +12,7 @@
 from ..compat import const
 from ..crc import crc16
 from ..errors import EncodeError
+from .lineframe import SyncLines
 
 SYNC_CMD = const(0x23)  # '#'
 SYNC_RSP = const(0x24)  # '$'
@@ -163,75 +164,19 @@ JUNK_CRC = const(5)
 JUNK_SHORT = const(6)  # fewer than CID + CRC
 
 
-class LineDecoder:
-    # Cuts the byte stream into messages that start with `sync`. Accepts CR,
-    # LF or both as the end of a line. Good messages go to
-    # sink.on_message(buf, n) with buf[0] the CID and n counting CID +
-    # payload; everything else is dropped, counted and reported to
-    # sink.on_junk(kind). Two preallocated buffers; no allocation per byte.
+class LineDecoder(SyncLines):
+    # Cuts the byte stream into messages that start with `sync` (the
+    # framing is lineframe's). Accepts CR, LF or both as the end of a line.
+    # Good messages go to sink.on_message(buf, n) with buf[0] the CID and n
+    # counting CID + payload; everything else is dropped, counted and
+    # reported to sink.on_junk(kind). Two preallocated buffers; no allocation per byte.
     def __init__(self, sync, sink, max_msg=MAX_MSG):
-        self.sync = sync
-        self._sink = sink
-        self._line = bytearray(2 * max_msg)
+        SyncLines.__init__(self, sync, sink, 2 * max_msg, JUNK_TEXT, JUNK_TRUNCATED, JUNK_OVERLONG)
         self._msg = bytearray(max_msg)
-        self._n = 0
-        self._in = False
-        self._over = False
-        self._text = 0  # characters seen outside any line
         self.messages = 0
-        self.junk = {}
 
-    def _junk(self, kind):
-        self.junk[kind] = self.junk.get(kind, 0) + 1
-        self._sink.on_junk(kind)
-
-    def reset(self):
+    def _end_line(self, n):
         self._n = 0
-        self._in = False
-        self._over = False
-        self._text = 0
-
-    def feed(self, data):
-        sync = self.sync
-        line = self._line
-        cap = len(line)
-        n = self._n
-        for b in data:
-            if b == sync:
-                if self._in:
-                    self._n = n
-                    self._junk(JUNK_TRUNCATED)
-                elif self._text:
-                    self._junk(JUNK_TEXT)
-                self._in = True
-                self._over = False
-                self._text = 0
-                n = 0
-            elif b == 13 or b == 10:
-                if self._in:
-                    self._in = False
-                    self._n = n
-                    self._end_line()
-                    n = 0
-                elif self._text:
-                    self._text = 0
-                    self._junk(JUNK_TEXT)
-            elif self._in:
-                if n < cap:
-                    line[n] = b
-                    n += 1
-                else:
-                    self._over = True
-            else:
-                self._text += 1
-        self._n = n
-
-    def _end_line(self):
-        n = self._n
-        self._n = 0
-        if self._over:
-            self._junk(JUNK_OVERLONG)
-            return
         if n & 1:
             self._junk(JUNK_HEX)
             return
