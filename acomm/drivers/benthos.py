@@ -18,17 +18,14 @@
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX
+from ..events import EV_RX
 from . import benthos_wire as w
 from .benthos_answers import C_AT, C_ATO, C_ESCAPE, C_PAYLOAD, C_QUERY, C_RANGE, C_SET, INFO, answer, stray
 from .benthos_config import BenthosConfig, setup_steps
 from .benthos_lines import LineSplitter, RxBlock
 from .benthos_slot import IDLE, K_DATA, K_PING, QUEUED, Slot
-from .slotbase import SlotDriver
+from .slotbase import S_CONFIG, S_START, S_UP, SlotDriver
 
-_S_START = const(0)
-_S_CONFIG = const(1)
-_S_UP = const(2)
 
 M_UNKNOWN = const(0)
 M_COMMAND = const(1)
@@ -116,7 +113,6 @@ class BenthosDriver(SlotDriver):
         self.junk = {}
         self._lines = LineSplitter(2 * rx_max + 32, self)
         self.rx = RxBlock(rx_max, self)
-        self._state = _S_START
         self.mode = M_UNKNOWN
         self._cmd = 0
         self._owner = _O_CONFIG
@@ -135,9 +131,6 @@ class BenthosDriver(SlotDriver):
         return w.airtime_ms(self.tx_rate, nbytes, self.packet_ms)
 
     # -- the driver interface ------------------------------------------------------
-    def ready(self, now):
-        return self._state == _S_UP and self.slot.state == IDLE
-
     def send(self, now, addr, data, ack=False):
         # ack is ignored: the modem reports no delivery (the link adds its
         # own acks because the caps lack CAP_RELIABLE)
@@ -168,8 +161,8 @@ class BenthosDriver(SlotDriver):
 
     def poll(self, now):
         self._now = now
-        if self._state == _S_START:
-            self._state = _S_CONFIG
+        if self._state == S_START:
+            self._state = S_CONFIG
             self._written = now  # the guard time counts from here
             self.config.start(now)
         if self._cmd and ticks_diff(now, self._deadline) >= 0:
@@ -234,9 +227,9 @@ class BenthosDriver(SlotDriver):
             if ticks_diff(now, self._hold_until) < 0:
                 return
             self._hold_until = None
-        if self._state == _S_START:
+        if self._state == S_START:
             return
-        up = self._state == _S_UP
+        up = self._state == S_UP
         self._owner = _O_CONFIG
         if up:
             st = self.slot.state
@@ -263,7 +256,7 @@ class BenthosDriver(SlotDriver):
             return
         if up:
             self.slot.start(now)
-        elif self._state == _S_CONFIG:
+        elif self._state == S_CONFIG:
             self.config.pump(now)
 
     # -- outcomes of commands ----------------------------------------------------------
@@ -294,21 +287,18 @@ class BenthosDriver(SlotDriver):
             what = {C_ATO: "no CONNECT", C_PAYLOAD: "no " + w.FWD_UP}.get(kind)
             self.mode = M_UNKNOWN
             self._finish(now, False, what or "no reply")
-        if self._silent >= self.down_after and self._state == _S_UP:
+        if self._silent >= self.down_after and self._state == S_UP:
             self.lost(now, "modem not answering")
 
     # -- state changes -------------------------------------------------------------------
     def configured(self, now):
-        self._state = _S_UP
         self._silent = 0
         self.remote = None
-        self._events.append((EV_DRIVER_UP,))
+        self._went_up()
 
     def lost(self, now, reason):
         # The modem restarted or fell silent: whatever it was doing is gone.
-        if self._state == _S_UP:
-            self._events.append((EV_DRIVER_DOWN, reason))
-            self.config.down_reported = True
+        self._went_down(reason)
         self.slot.lost(reason)
         self._cmd = 0
         self._silent = 0
@@ -316,7 +306,7 @@ class BenthosDriver(SlotDriver):
         self.remote = None
         self.mode = M_UNKNOWN
         self.rx.reset()
-        self._state = _S_CONFIG
+        self._state = S_CONFIG
         self.config.start(now)
 
     # -- lines from the modem (LineSplitter and RxBlock sink) ---------------------------
@@ -354,7 +344,7 @@ class BenthosDriver(SlotDriver):
                 return
         if self._cmd and s == self._text:
             self.stats["echo"] += 1
-            if self._state == _S_UP:
+            if self._state == S_UP:
                 # the setup turned the echo off: the modem restarted
                 # without a banner and lost its settings
                 self.stats["reboots"] += 1

@@ -15,16 +15,12 @@
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP
 from . import evologics_rx as rx
 from . import evologics_wire as w
 from .evologics_config import EvologicsConfig
 from .evologics_slot import CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING, KIND_NAMES, PTIME, QUEUED, AcousticSlot
-from .slotbase import SlotDriver
+from .slotbase import S_CONFIG, S_UP, SlotDriver
 
-_S_START = const(0)
-_S_CONFIG = const(1)  # (re)configuring; also "down" while the modem is silent
-_S_UP = const(2)
 
 # command slot contents (the configuration steps use 1..7)
 C_SEND = const(20)
@@ -123,7 +119,6 @@ class EvologicsDriver(SlotDriver):
         self._reader = w.LineReader(self, w.RX_SPECS_16 if firmware16 else w.RX_SPECS, max(mtu, w.IM_MAX))
         self._now = 0
         self._rx_at = 0
-        self._state = _S_START
         self._cmd = 0  # what the command slot waits for, 0 for nothing
         self._cmd_deadline = 0
         self._silent = 0  # commands timed out in a row
@@ -152,9 +147,6 @@ class EvologicsDriver(SlotDriver):
     @property
     def junk(self):
         return self._reader.junk
-
-    def ready(self, now):
-        return self._state == _S_UP and self.slot.state == IDLE
 
     def send(self, now, addr, data, ack=False):
         if not self.ready(now):
@@ -194,9 +186,7 @@ class EvologicsDriver(SlotDriver):
 
     def poll(self, now):
         self._now = now
-        if self._state == _S_START:
-            self._state = _S_CONFIG
-            self.config.start(now)
+        self._begin(now)
         r = self._reader
         if r.partial() and ticks_diff(now, self._rx_at) >= self.rx_gap_ms:
             r.flush()  # a line that never ended
@@ -221,8 +211,8 @@ class EvologicsDriver(SlotDriver):
         # then probes.
         if self._cmd:
             return
-        if self._state != _S_UP:
-            if self._state == _S_CONFIG:
+        if self._state != S_UP:
+            if self._state == S_CONFIG:
                 self.config.pump(now)
             return
         slot = self.slot
@@ -257,7 +247,7 @@ class EvologicsDriver(SlotDriver):
         self._cmd = 0
         self.stats["cmd_timeouts"] += 1
         self._silent += 1
-        if self._state == _S_CONFIG:
+        if self._state == S_CONFIG:
             self.config.failed(now, "no reply to the modem's set-up")
             return
         slot = self.slot
@@ -278,9 +268,8 @@ class EvologicsDriver(SlotDriver):
 
     # -- state changes -----------------------------------------------------
     def configured(self, now):
-        self._state = _S_UP
         self._silent = 0
-        self._events.append((EV_DRIVER_UP,))
+        self._went_up()
 
     def address_known(self, now, prev, addr):
         pass  # hook for the configuration; the address lives there
@@ -288,14 +277,12 @@ class EvologicsDriver(SlotDriver):
     def lost(self, now, reason):
         # The modem rebooted, fell silent or the connection to it was lost
         # (a transport may call this): whatever it was doing is gone.
-        if self._state == _S_UP:
-            self._events.append((EV_DRIVER_DOWN, reason))
-            self.config.down_reported = True
+        self._went_down(reason)
         self._restart(now, reason)
 
     def refresh(self, now):
         # Set the modem up again without saying it is down.
-        if self._state == _S_UP:
+        if self._state == S_UP:
             self._restart(now, None)
 
     def _restart(self, now, reason):
@@ -309,7 +296,7 @@ class EvologicsDriver(SlotDriver):
         self._ctrl = False
         self._ptime = False
         self._reader.reset()
-        self._state = _S_CONFIG
+        self._state = S_CONFIG
         self.config.start(now)
 
     # -- lines from the modem (LineReader sink) ----------------------------
@@ -380,7 +367,7 @@ class EvologicsDriver(SlotDriver):
             self.stats["reboots"] += 1
             self.lost(now, "modem rebooted")
             return
-        if self._state == _S_CONFIG:
+        if self._state == S_CONFIG:
             self.config.reply(now, what, r, kind)
             return
         slot = self.slot

@@ -12,19 +12,15 @@
 # Received frames, mini-packets and reboots arrive at any time in between.
 
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
-from ..compat import const, ticks_add, ticks_diff
+from ..compat import ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX
+from ..events import EV_RX
 from . import micromodem_nmea as nm
 from .micromodem_air import BITRATE, FRAME_BYTES, Airtime, check_rate
 from .micromodem_config import MicroModemConfig
 from .micromodem_mini import advert_to_mini, mini_to_advert
-from .micromodem_slot import ECHO, IDLE, K_DATA, K_MINI, K_PING, AcousticSlot
-from .slotbase import SlotDriver
-
-_S_START = const(0)
-_S_CONFIG = const(1)  # (re)configuring; also "down" while the modem is silent
-_S_UP = const(2)
+from .micromodem_slot import ECHO, K_DATA, K_MINI, K_PING, AcousticSlot
+from .slotbase import S_CONFIG, SlotDriver
 
 
 class MicroModemDriver(SlotDriver):
@@ -96,7 +92,6 @@ class MicroModemDriver(SlotDriver):
         }
         self._rd = nm.LineReader(self, csum32=csum32)
         self._now = 0
-        self._state = _S_START
         self._cmd = None  # the echo awaited, e.g. b"CACYC"
         self._cmd_line = b""
         self._cmd_deadline = 0
@@ -124,9 +119,6 @@ class MicroModemDriver(SlotDriver):
     @property
     def junk(self):
         return self._rd.junk
-
-    def ready(self, now):
-        return self._state == _S_UP and self.slot.state == IDLE
 
     def send(self, now, addr, data, ack=False):
         if not self.ready(now):
@@ -165,9 +157,7 @@ class MicroModemDriver(SlotDriver):
 
     def poll(self, now):
         self._now = now
-        if self._state == _S_START:
-            self._state = _S_CONFIG
-            self.config.start(now)
+        self._begin(now)
         if self._cmd is not None and ticks_diff(now, self._cmd_deadline) >= 0:
             self._cmd_timed_out(now)
         self.slot.poll(now)
@@ -197,29 +187,26 @@ class MicroModemDriver(SlotDriver):
         line = self._cmd_line
         self._cmd = None
         what = "no answer to $%s" % line[1:6].decode()
-        if self._state == _S_CONFIG:
+        if self._state == S_CONFIG:
             self.config.failed(now, what)
             return
         self.slot.fail(what)
         self.lost(now, "modem not answering")
 
     def _pump(self, now):
-        if self._state == _S_CONFIG and self._cmd is None:
+        if self._state == S_CONFIG and self._cmd is None:
             self.config.pump(now)
 
     # -- state changes -------------------------------------------------------------
     def configured(self, now):
-        self._state = _S_UP
-        self._events.append((EV_DRIVER_UP,))
+        self._went_up()
 
     def lost(self, now, reason, wait_ms=0):
         # The modem rebooted or fell silent: whatever it was doing is gone.
-        if self._state == _S_UP:
-            self._events.append((EV_DRIVER_DOWN, reason))
-            self.config.down_reported = True
+        self._went_down(reason)
         self.slot.fail(reason)
         self._cmd = None
-        self._state = _S_CONFIG
+        self._state = S_CONFIG
         self.config.start(now, wait_ms)
 
     # -- sentences from the modem (LineReader sink) ----------------------------------
@@ -231,7 +218,7 @@ class MicroModemDriver(SlotDriver):
         f = nm.fields(buf, n)
         name = f[0]
         if self._cmd is not None and name == self._cmd:
-            if self._state == _S_CONFIG:
+            if self._state == S_CONFIG:
                 if self.config.answer(now, f):
                     self._cmd = None
                 else:
@@ -270,7 +257,7 @@ class MicroModemDriver(SlotDriver):
         module = f[2].decode() if len(f) > 2 else "?"
         msg = f[4].decode() if len(f) > 4 else ""
         reason = "modem error %s: %s" % (module, msg) if msg else "modem error %s" % module
-        if self._state == _S_CONFIG and self._cmd is not None:
+        if self._state == S_CONFIG and self._cmd is not None:
             self._cmd = None
             self.config.failed(now, reason)
         elif self.slot.error(reason):

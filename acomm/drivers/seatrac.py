@@ -13,17 +13,14 @@
 # slot without ever blocking the link.
 
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
-from ..compat import const, ticks_add, ticks_diff
+from ..compat import ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX
+from ..events import EV_RX
 from . import seatrac_wire as w
 from .seatrac_config import SeatracConfig
 from .seatrac_slot import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot
-from .slotbase import SlotDriver
+from .slotbase import S_CONFIG, S_UP, SlotDriver
 
-_S_START = const(0)
-_S_CONFIG = const(1)  # (re)configuring; also "down" while the beacon is silent
-_S_UP = const(2)
 
 # answers to commands (ours, late, or someone else's on the line)
 _COMMANDS = (
@@ -108,7 +105,6 @@ class SeatracDriver(SlotDriver):
         self._msg = bytearray(w.MAX_MSG)
         self._line = bytearray(2 * w.MAX_MSG + 8)
         self._now = 0
-        self._state = _S_START
         self._cmd = 0  # CID awaiting its response, 0 for none
         self._cmd_deadline = 0
         self._silent = 0  # commands timed out in a row
@@ -133,9 +129,6 @@ class SeatracDriver(SlotDriver):
     @property
     def beacon_id(self):
         return self.config.own_id
-
-    def ready(self, now):
-        return self._state == _S_UP and self.slot.state == IDLE
 
     def send(self, now, addr, data, ack=False):
         if not self.ready(now):
@@ -167,9 +160,7 @@ class SeatracDriver(SlotDriver):
 
     def poll(self, now):
         self._now = now
-        if self._state == _S_START:
-            self._state = _S_CONFIG
-            self.config.start(now)
+        self._begin(now)
         if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
             self._cmd_timed_out(now)
         if self.slot.poll(now):
@@ -194,8 +185,8 @@ class SeatracDriver(SlotDriver):
         # then the link's frame, then probes.
         if self._cmd:
             return
-        if self._state != _S_UP:
-            if self._state == _S_CONFIG:
+        if self._state != S_UP:
+            if self._state == S_CONFIG:
                 self.config.pump(now)
             return
         if self.slot.state == QUEUED and (self._hold_until is None or ticks_diff(now, self._hold_until) >= 0):
@@ -216,7 +207,7 @@ class SeatracDriver(SlotDriver):
         self._cmd = 0
         self.stats["cmd_timeouts"] += 1
         self._silent += 1
-        if self._state == _S_CONFIG:
+        if self._state == S_CONFIG:
             self.config.failed(now, "no response to command 0x%02X" % cid)
             return
         slot = self.slot
@@ -233,21 +224,18 @@ class SeatracDriver(SlotDriver):
     # -- state changes -----------------------------------------------------
     def configured(self, now):
         # called by the configuration sequence when it is done
-        self._state = _S_UP
         self._silent = 0
-        self._events.append((EV_DRIVER_UP,))
+        self._went_up()
 
     def lost(self, now, reason):
         # The beacon rebooted or fell silent: whatever it was doing is gone.
-        if self._state == _S_UP:
-            self._events.append((EV_DRIVER_DOWN, reason))
-            self.config.down_reported = True
+        self._went_down(reason)
         if self.slot.state != IDLE:
             self.slot.fail(reason)
         self._hold_until = None
         self._cmd = 0
         self._probe = False
-        self._state = _S_CONFIG
+        self._state = S_CONFIG
         self.config.start(now)
 
     def uptime(self, now, secs, expected_reboot=False):
@@ -258,7 +246,7 @@ class SeatracDriver(SlotDriver):
         elapsed = ticks_diff(now, self._up_at)
         self._up_s = secs
         self._up_at = now
-        if prev is None or expected_reboot or self._state != _S_UP:
+        if prev is None or expected_reboot or self._state != S_UP:
             return False
         if secs * 1000 + 2000 + elapsed // 100 < prev * 1000 + elapsed:
             self.stats["reboots"] += 1
@@ -273,7 +261,7 @@ class SeatracDriver(SlotDriver):
     def on_junk(self, kind):
         # Text outside messages is what a rebooting beacon prints: ask it
         # how long it has been up. Damaged lines are only counted.
-        if kind == w.JUNK_TEXT and self._state == _S_UP:
+        if kind == w.JUNK_TEXT and self._state == S_UP:
             self._probe = True
 
     def on_message(self, b, n):
@@ -283,7 +271,7 @@ class SeatracDriver(SlotDriver):
         self._silent = 0
         if cid == self._cmd:
             self._cmd = 0
-            if self._state == _S_CONFIG:
+            if self._state == S_CONFIG:
                 self.config.response(now, b, n)
             elif cid == w.CID_DAT_SEND or cid == w.CID_PING_SEND:
                 if self.slot.state == CMD and n >= 2:

@@ -1,12 +1,18 @@
 # What the drivers that run one acoustic transaction at a time (SeaTrac,
-# EvoLogics, Micro-Modem, Benthos) share: the handles the link gets for its
-# requests, a request refused through the event list, and the slot that
-# holds the one transaction under way. Each modem's slot adds its own
-# states (after QUEUED) and how the transaction goes on its wire.
+# EvoLogics, Micro-Modem, Benthos) share: their life (configuring, up, and
+# down again when the modem restarts or falls silent), the handles the link
+# gets for its requests, a request refused through the event list, and the
+# slot that holds the one transaction under way. Each modem's slot adds its
+# own states (after QUEUED) and how the transaction goes on its wire.
 
 from ..compat import const
-from ..events import EV_TX_FAILED
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_TX_FAILED
 from .base import SansIO
+
+# the driver's own state
+S_START = const(0)  # created: the first poll() starts the configuration
+S_CONFIG = const(1)  # (re)configuring; also "down" while the modem is silent
+S_UP = const(2)
 
 # the two states every slot has; each *_slot module numbers its own from 2
 IDLE = const(0)
@@ -14,11 +20,34 @@ QUEUED = const(1)
 
 
 class SlotDriver(SansIO):
-    # needs self.slot (a SlotBase, or one with start() instead of accept())
-    # and self._pump(now), which writes the next command when it can
+    # needs self.config (start(now), down_reported), self.slot (a SlotBase,
+    # or one with start() instead of accept()) and self._pump(now), which
+    # writes the next command when it can
     def __init__(self):
         SansIO.__init__(self)
+        self._state = S_START
         self._h = 0  # the last handle given out
+
+    def ready(self, now):
+        return self._state == S_UP and self.slot.state == IDLE
+
+    def _begin(self, now):
+        # for poll(): the first one starts the configuration
+        if self._state == S_START:
+            self._state = S_CONFIG
+            self.config.start(now)
+
+    def _went_up(self):
+        # the configuration is done
+        self._state = S_UP
+        self._events.append((EV_DRIVER_UP,))
+
+    def _went_down(self, reason):
+        # Only a driver that was up says it is down, and the configuration
+        # remembers that it did, so that its retries do not say so again.
+        if self._state == S_UP:
+            self._events.append((EV_DRIVER_DOWN, reason))
+            self.config.down_reported = True
 
     def _handle(self):
         self._h = (self._h + 1) & 0xFFFF
