@@ -30,7 +30,7 @@ from acomm.drivers import benthos_wire as w
 from acomm.drivers.base import SansIO
 
 from .benthos_shell import Shell, defaults
-from .faults import FaultModes, cut
+from .faults import FaultModes, cut, hit
 from .benthos_xcvr import Transceiver
 
 BANNER = (
@@ -120,9 +120,7 @@ class BenthosEmulator(SansIO, FaultModes):
         # (a damaged receive block is a CRC:Fail block: see report())
         f = self._fault(("truncate",) if kind == "data" else ("corrupt", "truncate"), kind)
         if f is not None and f[0] == "corrupt":
-            b = bytearray(data)
-            b[min(2, len(lines[0]) - 1)] = 0x23  # '#' in the first word
-            data = bytes(b)
+            data = hit(data, min(2, len(lines[0]) - 1))  # in the first word
         elif f is not None:
             data = cut(data, f[3])
         self._out.extend(data)

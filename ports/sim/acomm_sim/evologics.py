@@ -27,7 +27,7 @@ from acomm.compat import ticks_diff
 from acomm.drivers import evologics_wire as w
 from acomm.drivers.base import SansIO
 
-from .faults import FaultModes
+from .faults import FaultModes, hit
 from .evologics_xcvr import P_BURST, P_IM, P_IMS, P_PBM, Transceiver
 
 BANNER = (b"EvoLogics S2C modem (acomm emulator)", b"firmware 1.7 started")
@@ -157,12 +157,10 @@ class EvologicsEmulator(SansIO, FaultModes):
         # One line with any output fault that applies; name is the envelope
         # name in data mode (None for notifications).
         f = self._fault(("damage", "truncate"), line)
-        if f is not None and f[0] == "damage":
-            line = bytearray(line)
-            line[1 if len(line) > 1 else 0] = 0x23  # '#': one character hit
-            line = bytes(line)
         term = b"\r\n"
-        if f is not None and f[0] == "truncate":
+        if f is not None and f[0] == "damage":
+            line = hit(line, 1 if len(line) > 1 else 0)
+        elif f is not None:
             line = line[: len(line) // 2]
             term = b"\r\n" if f[3] else b""
         if self.data_mode:

@@ -85,6 +85,14 @@ def cut(data, terminate):
     return data[: len(data) // 2] + (CRLF if terminate else b"")
 
 
+def hit(data, i):
+    # A line with one character damaged, for protocols without a checksum:
+    # a '#' at i, where the driver will find a word it does not know.
+    b = bytearray(data)
+    b[i] = 0x23
+    return bytes(b)
+
+
 def digit_off(buf, i):
     # one checksum digit wrong, whatever it was
     buf[i] = 0x30 if buf[i] != 0x30 else 0x31
