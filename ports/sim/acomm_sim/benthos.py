@@ -130,21 +130,10 @@ class BenthosEmulator(SansIO, FaultModes):
             self.emit("prompt", w.prompt_text(self.prompt_n), False)
 
     # -- fault modes ----------------------------------------------------------------------
-    def corrupt_next(self, what=None, count=1):
-        # what: "data" (a CRC:Fail block instead of the good one), "reply",
-        # "connect", "fwd", "prompt", "range", or None for the next of any
-        self._add_fault("corrupt", what, count, None)
-
-    def truncate_next(self, what=None, count=1, terminate=True):
-        # the line (or block) stops half way, with CR LF, or without any end
-        # so that it runs into the next line
-        self._add_fault("truncate", what, count, terminate)
-
-    def swallow_next(self, what=None, count=1, execute=False):
-        # what: the start of a command line ("ATO", "@RemoteAddr", "ATR"...).
-        # The command is never answered; with execute=True it is carried out
-        # and only its answer is lost.
-        self._add_fault("swallow", what, count, execute)
+    # (corrupt_next, truncate_next, swallow_next: acomm_sim.faults). Keys:
+    # for output faults "data" (corrupt: a CRC:Fail block instead of the
+    # good one), "reply", "connect", "fwd", "prompt", "range"; for swallow,
+    # the start of a command line ("ATO", "@RemoteAddr", "ATR"...).
 
     def _fault_matches(self, f, what):
         # any (None) is never the echo or the banner; a swallow is keyed by

@@ -156,9 +156,9 @@ class EvologicsEmulator(SansIO, FaultModes):
     def _emit(self, line, name):
         # One line with any output fault that applies; name is the envelope
         # name in data mode (None for notifications).
-        f = self._fault(("damage", "truncate"), line)
+        f = self._fault(("corrupt", "truncate"), line)
         term = b"\r\n"
-        if f is not None and f[0] == "damage":
+        if f is not None and f[0] == "corrupt":
             line = hit(line, 1 if len(line) > 1 else 0)
         elif f is not None:
             line = line[: len(line) // 2]
@@ -186,20 +186,9 @@ class EvologicsEmulator(SansIO, FaultModes):
         self.notify(head + data)
 
     # -- fault modes -------------------------------------------------------------
-    def corrupt_next(self, prefix=None, count=1):
-        # the next output line(s) starting with prefix (any when None) come
-        # out with one character damaged
-        self._add_fault("damage", prefix, count, None)
-
-    def truncate_next(self, prefix=None, count=1, terminate=True):
-        # the next output line(s) stop half way: with CR LF, or without
-        # (terminate=False) so that the next line runs into it
-        self._add_fault("truncate", prefix, count, terminate)
-
-    def swallow_next(self, prefix=None, count=1, execute=False):
-        # the next command(s) starting with prefix are never answered; with
-        # execute=True they are still carried out (only the answer is lost)
-        self._add_fault("swallow", prefix, count, execute)
+    # (corrupt_next, truncate_next, swallow_next: acomm_sim.faults). Keys
+    # are line prefixes (b"DELIVEREDIM", b"AT*SENDIM"); corrupt damages one
+    # character, since the protocol has no checksum.
 
     def _fault_matches(self, f, line):
         # faults are keyed by how the line starts

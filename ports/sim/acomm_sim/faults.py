@@ -3,14 +3,21 @@
 # never answered (or carried out without its answer), and a restart at any
 # moment, deaf for boot_ms, then the power-up text.
 #
-# Each emulator keeps its own corrupt_next / truncate_next / swallow_next,
-# because what a fault is keyed by differs (a CID, a line prefix, a sentence
-# type, a kind of output) and so do the names tests and docs use for it; it
-# files them with _add_fault and, where a key matches other than by
-# equality, says so in _fault_matches. The bookkeeping is here.
+# What a fault is keyed by differs per modem (a SeaTrac CID, an EvoLogics
+# line prefix, a Micro-Modem sentence type, a Benthos kind of output; each
+# emulator's header says which); an emulator that normalises keys overrides
+# _fault_key, and one whose keys match other than by equality overrides
+# _fault_matches. Arming and bookkeeping are here:
 #
-# A fault is [kind, key or None (any), count, option]: option is
-# `terminate` for "truncate", `execute` for "swallow".
+#   corrupt_next(key, count)     the next output line(s) come out damaged
+#                                (a wrong checksum where the protocol has one)
+#   truncate_next(key, count, terminate)   they stop half way, with their
+#                                line end or (terminate=False) without
+#   swallow_next(key, count, execute)      the next command(s) are never
+#                                answered; execute=True still carries them out
+#
+# A fault is [kind, key or None (any), count, option]: kind "corrupt",
+# "truncate" or "swallow"; option is `terminate` or `execute`.
 #
 # Needs from the emulator: _out (SansIO), _booting_until (None while up),
 # banner (lines without their end), boot_ms and _booted(now); for
@@ -26,8 +33,20 @@ class FaultModes:
     def inject_noise(self, data):
         self._out.extend(data)
 
+    def corrupt_next(self, key=None, count=1):
+        self._add_fault("corrupt", key, count, None)
+
+    def truncate_next(self, key=None, count=1, terminate=True):
+        self._add_fault("truncate", key, count, terminate)
+
+    def swallow_next(self, key=None, count=1, execute=False):
+        self._add_fault("swallow", key, count, execute)
+
+    def _fault_key(self, key):
+        return key
+
     def _add_fault(self, kind, key, count, option):
-        self._faults.append([kind, key, count, option])
+        self._faults.append([kind, self._fault_key(key), count, option])
 
     def _fault_matches(self, f, key):
         return f[1] is None or f[1] == key

@@ -121,8 +121,8 @@ class MicroModemEmulator(SansIO, FaultModes):
             self._mute = None
             return
         line = (nm.sentence32 if self.csum32 else nm.sentence)(name, *fields)
-        f = self._fault(("crc", "truncate"), kind)
-        if f is not None and f[0] == "crc":
+        f = self._fault(("corrupt", "truncate"), kind)
+        if f is not None and f[0] == "corrupt":
             line = bytearray(line)
             k = line.index(b"*") + 2
             digit_off(line, k)
@@ -132,19 +132,10 @@ class MicroModemEmulator(SansIO, FaultModes):
         self._out.extend(line)
 
     # -- fault modes -----------------------------------------------------------------
-    def corrupt_next(self, name=None, count=1):
-        # the next `count` output sentences (of this type) carry a wrong checksum
-        self._add_fault("crc", _kind(name), count, False)
-
-    def truncate_next(self, name=None, count=1, terminate=True):
-        # the line stops half way: with CR LF, or (terminate=False) with the
-        # next line's '$' as its only end
-        self._add_fault("truncate", _kind(name), count, terminate)
-
-    def swallow_next(self, name=None, count=1, execute=False):
-        # the next host sentence (of this type) is never answered; with
-        # execute=True it is still carried out and only its echo is lost
-        self._add_fault("swallow", _kind(name), count, execute)
+    # (corrupt_next, truncate_next, swallow_next: acomm_sim.faults). Keys
+    # are sentence types ("CAACK", "CCCYC"); corrupt gives a wrong checksum.
+    def _fault_key(self, key):
+        return _kind(key)
 
     def reboot(self, now):
         # Power cycle or watchdog: everything in flight is forgotten, the port

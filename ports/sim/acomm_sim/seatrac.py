@@ -132,8 +132,8 @@ class SeatracEmulator(SansIO, FaultModes):
         msg[1:] = payload
         line = self._line
         k = w.encode_into(line, w.SYNC_RSP, msg, len(msg))
-        f = self._fault(("crc", "truncate"), cid)
-        if f is not None and f[0] == "crc":
+        f = self._fault(("corrupt", "truncate"), cid)
+        if f is not None and f[0] == "corrupt":
             digit_off(line, k - 3)
         elif f is not None:
             keep = k // 2
@@ -143,18 +143,8 @@ class SeatracEmulator(SansIO, FaultModes):
         self._out.extend(memoryview(line)[:k])
 
     # -- fault modes -----------------------------------------------------------
-    def corrupt_next(self, cid=None, count=1):
-        self._add_fault("crc", cid, count, False)
-
-    def truncate_next(self, cid=None, count=1, terminate=True):
-        # the line stops half way: with CR LF, or (terminate=False) with
-        # the next line's '$' as the only end
-        self._add_fault("truncate", cid, count, terminate)
-
-    def swallow_next(self, cid=None, count=1, execute=False):
-        # the next command is never answered; with execute=True it is still
-        # carried out (only the answer is lost)
-        self._add_fault("swallow", cid, count, execute)
+    # (corrupt_next, truncate_next, swallow_next: acomm_sim.faults). Keys
+    # are CIDs; corrupt gives a wrong CRC.
 
     def reboot(self, now):
         # Power cycle or watchdog: everything in flight is forgotten, the
