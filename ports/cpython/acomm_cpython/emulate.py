@@ -21,7 +21,7 @@ import socket
 import sys
 import time
 
-from .streams import _set_raw
+from .streams import set_raw
 
 # name -> (module, class, default TCP port or None)
 MODEMS = {
@@ -73,7 +73,7 @@ class Pty:
     # here too, so the master does not read EIO while nobody has the port.
     def __init__(self, link):
         self.master, self.slave = os.openpty()
-        _set_raw(self.slave)
+        set_raw(self.slave)
         os.set_blocking(self.master, False)
         self.device = os.ttyname(self.slave)
         self.link = link
@@ -238,7 +238,6 @@ class EmulatorHost:
                         data = st.tcp.read(c)
                         if data:
                             st.emu.feed(now, data)
-        self.medium.poll(now)
         for st in self.stations:
             st.emu.poll(now)
         self.medium.poll(now)

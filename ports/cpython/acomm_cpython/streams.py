@@ -75,7 +75,7 @@ def open_serial(path, baud, **kwargs):
     return SerialStream(serial.Serial(path, baud, **kwargs))
 
 
-def _set_raw(fd):
+def set_raw(fd):
     # Raw mode: no echo, no line editing, no CR/LF translation on either side.
     tty.setraw(fd, termios.TCSANOW)
     attrs = termios.tcgetattr(fd)
@@ -100,7 +100,7 @@ class PtyPair:
             m2, s2 = os.openpty()
             self._fds += [m2, s2]
             for s in (s1, s2):
-                _set_raw(s)
+                set_raw(s)
             for m in (m1, m2):
                 os.set_blocking(m, False)
             # The slaves stay open here as well: on Linux a master whose slave

@@ -104,6 +104,7 @@ class Channel(Medium):
         return self._pos.get(addr)
 
     def offset(self, a, b):
+        # Medium.distance falls back to this, so tracks count there too
         pa = self.position(a)
         pb = self.position(b)
         if pa is None or pb is None:
@@ -140,16 +141,6 @@ class Channel(Medium):
             self.range_lost += 1
             return True
         return False
-
-    def distance(self, a, b):
-        d = self._dist.get((a, b) if a < b else (b, a))
-        if d is not None:
-            return d
-        pa = self.position(a)
-        pb = self.position(b)
-        if pa is not None and pb is not None:
-            return _dist(pa, pb)
-        return self.default_distance
 
     def poll(self, now):
         self._now = now

@@ -30,18 +30,6 @@ from acomm.node import Node
 from .channel import Channel
 
 
-def _seatrac(addr, opts):
-    from acomm.drivers.seatrac import SeatracDriver
-
-    return SeatracDriver(addr, **opts)
-
-
-def _seatrac_emu(ch, addr, now, opts):
-    from .seatrac import SeatracEmulator
-
-    return SeatracEmulator(ch, addr, now=now, **opts)
-
-
 def _packet_driver(profile):
     def make(addr, opts):
         from acomm.drivers.transparent import TransparentDriver
@@ -66,28 +54,27 @@ def _packet_emu(profile):
     return make
 
 
-def _by_path(mod, cls):
-    def make(*args):
-        m = __import__(mod, None, None, [cls])
-        opts = args[-1]
-        if len(args) == 2:
-            return getattr(m, cls)(args[0], **opts)
-        return getattr(m, cls)(args[0], args[1], now=args[2], **opts)
+def _load(mod, cls):
+    # imported on first use: a World with SeaTrac beacons loads no other modem
+    return getattr(__import__(mod, None, None, [cls]), cls)
 
-    return make
+
+def _driver(mod, cls):
+    return lambda addr, opts: _load(mod, cls)(addr, **opts)
+
+
+def _emulator(mod, cls):
+    return lambda ch, addr, now, opts: _load(mod, cls)(ch, addr, now=now, **opts)
 
 
 # modem name -> (driver factory(address, opts), emulator factory(channel, address, now, opts))
 MODEMS = {
-    "seatrac": (_seatrac, _seatrac_emu),
+    "seatrac": (_driver("acomm.drivers.seatrac", "SeatracDriver"), _emulator("acomm_sim.seatrac", "SeatracEmulator")),
     "bpsk": (_packet_driver("bpsk"), _packet_emu("bpsk")),
     "fhss": (_packet_driver("fhss"), _packet_emu("fhss")),
-    "evologics": (_by_path("acomm.drivers.evologics", "EvologicsDriver"),
-                  _by_path("acomm_sim.evologics", "EvologicsEmulator")),
-    "micromodem": (_by_path("acomm.drivers.micromodem", "MicroModemDriver"),
-                   _by_path("acomm_sim.micromodem", "MicroModemEmulator")),
-    "benthos": (_by_path("acomm.drivers.benthos", "BenthosDriver"),
-                _by_path("acomm_sim.benthos", "BenthosEmulator")),
+    "evologics": (_driver("acomm.drivers.evologics", "EvologicsDriver"), _emulator("acomm_sim.evologics", "EvologicsEmulator")),
+    "micromodem": (_driver("acomm.drivers.micromodem", "MicroModemDriver"), _emulator("acomm_sim.micromodem", "MicroModemEmulator")),
+    "benthos": (_driver("acomm.drivers.benthos", "BenthosDriver"), _emulator("acomm_sim.benthos", "BenthosEmulator")),
 }
 
 

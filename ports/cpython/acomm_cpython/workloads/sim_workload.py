@@ -24,7 +24,7 @@ BITRATE, FRAMING = 400, 12
 
 
 def airtime_ms():
-    n = PAYLOAD + 5 + 2  # raw acomm header and CRC, SLIP ends are not sent
+    n = PAYLOAD + 5  # raw acomm header (3) and CRC (2); the SLIP ends stay on the serial line
     return ((n + FRAMING) * 8000 + BITRATE - 1) // BITRATE
 
 
