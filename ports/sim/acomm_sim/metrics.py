@@ -23,11 +23,15 @@ def mean(xs):
     return sum(xs) / len(xs) if xs else None
 
 
+def latency_steps(latencies):
+    # |L_k - L_(k-1)| for consecutive received packets
+    return [abs(latencies[i] - latencies[i - 1]) for i in range(1, len(latencies))]
+
+
 def jitter(latencies):
-    # seed 004: mean absolute difference of consecutive latencies
-    if len(latencies) < 2:
-        return None
-    return sum(abs(latencies[i] - latencies[i - 1]) for i in range(1, len(latencies))) / (len(latencies) - 1)
+    # seed 004: mean absolute difference of consecutive latencies (its
+    # Table II also gives the median of the same differences)
+    return mean(latency_steps(latencies))
 
 
 def bootstrap_ci(xs, stat, resamples=1000, seed=1, level=0.95):

@@ -23,7 +23,7 @@
 from acomm.catalog import teleop
 from acomm.events import EV_RECEIVED
 from acomm_sim.channel import Channel
-from acomm_sim.metrics import median
+from acomm_sim.metrics import latency_steps, median
 from acomm_sim.world import World
 
 PER_RUNTIME = ()
@@ -92,12 +92,12 @@ def run_config(profile, distance, kind, seed=1):
                             got[k] = t
                 seen = len(heard)
     lat = [got[k] - sent[k] for k in sorted(got)]
-    jit = [abs(lat[i] - lat[i - 1]) for i in range(1, len(lat))]
+    jit = latency_steps(lat)
     return {
         "sent": len(sent),
         "pdr": 100.0 * len(got) / len(sent),
         "latency_median_ms": median(lat),
-        "jitter_median_ms": median(jit) if jit else None,
+        "jitter_median_ms": median(jit),
         "bytes_on_modem": len(encode(kind, 1, SEQUENCE[1][1])) + 5,
     }
 
