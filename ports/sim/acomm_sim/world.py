@@ -19,6 +19,11 @@
 # earliest wake-up. Runs stay deterministic. Modems (MODEMS below) are
 # looked up by name so that any emulated modem can be used; `mac` wraps the
 # node's driver (acomm.mac) to give it a TDMA slot or ALOHA backoff.
+#
+# Applications (traffic generators, a teleop pilot, the CADDY cycle) join
+# with w.add_task(task): task.poll(now) runs at the start of every step it
+# is due and returns when it next wants to run (a ticks value), or None for
+# "the next step". The clock never jumps past a task's wake-up.
 # Portable Python (the core tests run it on MicroPython too).
 
 from acomm.clock import ManualClock
@@ -109,6 +114,7 @@ class World:
         self.node_steps = 0
         self.node_skips = 0
         self.jumped_ms = 0
+        self._tasks = []  # [task, wake]
 
     def now(self):
         return self.clock()
@@ -138,6 +144,25 @@ class World:
         self._order.append(sn)
         return sn
 
+    def add_task(self, task):
+        self._tasks.append([task, None])
+        return task
+
+    def remove_task(self, task):
+        self._tasks = [t for t in self._tasks if t[0] is not task]
+
+    def _run_tasks(self, now):
+        ran = False
+        for t in self._tasks:
+            w = t[1]
+            if w is None or ticks_diff(now, w) >= 0:
+                t[1] = t[0].poll(now)
+                ran = True
+        if ran:
+            # a task may have given any node work: wake them all this step
+            for sn in self._order:
+                sn.wake = None
+
     def _quiet_until(self, sn, now):
         # when this node next needs a step; None means at the next one
         if sn.host_end.any():
@@ -164,6 +189,8 @@ class World:
     def step(self):
         now = self.clock()
         ch = self.channel
+        if self._tasks:
+            self._run_tasks(now)
         for sn in self._order:
             w = sn.wake
             if w is None or ticks_diff(now, w) >= 0 or sn.host_end.any():
@@ -191,6 +218,12 @@ class World:
         if self.channel.in_flight():
             return None
         first = None
+        for t in self._tasks:
+            w = t[1]
+            if w is None:
+                return None
+            if first is None or ticks_diff(w, first) < 0:
+                first = w
         for sn in self._order:
             w = sn.wake
             if w is None:
@@ -210,6 +243,8 @@ class World:
         end = ticks_add(self.clock(), ms)
         for sn in self._order:
             sn.wake = None  # the caller may have given them work
+        for t in self._tasks:
+            t[1] = None
         clk = self.clock
         while ticks_diff(end, clk()) > 0:
             self.step()
