@@ -15,7 +15,10 @@
 #          link asks ready() whether or not it has a frame, so a backoff that
 #          ran out long ago (an idle link) is drawn again: a frame that comes
 #          at an idle moment still waits a random time.
-#   MacDriver(driver, mac)   the wrapper the Link is given.
+#   MacDriver(driver, mac)   the wrapper the Link is given. Its `mac` may be
+#          swapped at run time (a mission that changes schedule), or set to
+#          None while something else orders the channel (a scripted
+#          interrogation cycle): then ready() is the driver's own.
 #
 # A modem's automatic replies (a SeaTrac beacon answering a REQ, a
 # Micro-Modem acking a frame) are not under the MAC: size the slot of the
@@ -121,19 +124,22 @@ class MacDriver:
     def ready(self, now):
         if not self.driver.ready(now):
             return False
-        if self.mac.may_start(now):
+        m = self.mac
+        if m is None or m.may_start(now):
             return True
         self.held += 1
         return False
 
     def send(self, now, addr, data, ack=False):
         h = self.driver.send(now, addr, data, ack)
-        self.mac.sent(now)
+        if self.mac is not None:
+            self.mac.sent(now)
         return h
 
     def ping(self, now, addr):
         h = self.driver.ping(now, addr)
-        self.mac.sent(now)
+        if self.mac is not None:
+            self.mac.sent(now)
         return h
 
     def feed(self, now, data):

@@ -77,3 +77,14 @@ def test_mac_driver_gates_ready_and_passes_everything_else():
     d.finish(h)
     assert m.take_events()[0][1] == h
     assert m.sent is d.sent  # other attributes are the driver's
+
+
+def test_mac_driver_without_a_mac_is_the_driver_and_a_schedule_can_be_swapped_in():
+    d = ScriptedDriver()
+    m = MacDriver(d, None)
+    assert m.ready(1500)  # nothing gates it
+    h = m.send(1500, 2, b"x", False)
+    d.finish(h)
+    m.take_events()
+    m.mac = Tdma(((1, 1000, 100), (2, 1000, 100)), 1)
+    assert not m.ready(1500) and m.ready(2150)

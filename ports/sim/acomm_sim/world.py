@@ -173,7 +173,7 @@ class World:
         d = link.driver
         queued = len(link.queue)
         cap = ticks_add(now, self.max_quiet_ms)
-        if isinstance(d, MacDriver):
+        if isinstance(d, MacDriver) and d.mac is not None:
             if not d.driver.ready(now):
                 return None
             if not queued:
