@@ -10,7 +10,16 @@ class Prng:
         self.seed(seed)
 
     def seed(self, seed):
-        s = seed & 0xFFFFFFFF
+        # xorshift's first outputs from a small state are small (seed 1
+        # gives 270369 first: chance(0.001) would be True), so the seed is
+        # mixed first (the murmur3 finaliser): nearby seeds give unrelated
+        # sequences from the first draw.
+        s = (seed * 0x9E3779B1) & 0xFFFFFFFF
+        s ^= s >> 16
+        s = (s * 0x85EBCA6B) & 0xFFFFFFFF
+        s ^= s >> 13
+        s = (s * 0xC2B2AE35) & 0xFFFFFFFF
+        s ^= s >> 16
         self._s = s if s else 0x9E3779B9
 
     def next32(self):
