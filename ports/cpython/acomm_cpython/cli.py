@@ -11,9 +11,10 @@ def main(argv=None):
     b.add_argument("name", help="core, queue, discovery, or all")
     b.add_argument("--json", action="store_true", help="one JSON object per line")
 
-    d = sub.add_parser("demo", help="run the demonstration scenario")
-    d.add_argument("--seed", type=int, default=1)
-    d.add_argument("--json", action="store_true", help="print the summary as JSON")
+    d = sub.add_parser("demo", help="run the demonstration mission on the simulated ocean")
+    from . import demo
+
+    demo.add_arguments(d)
 
     e = sub.add_parser("emulate", help="an emulated modem on a pseudo-terminal (and TCP)")
     from . import emulate
@@ -26,8 +27,6 @@ def main(argv=None):
 
         return bench.main(args)
     if args.cmd == "demo":
-        from . import demo
-
         return demo.main(args)
     if args.cmd == "emulate":
         return emulate.main(args)

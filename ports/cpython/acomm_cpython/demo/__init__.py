@@ -1,0 +1,59 @@
+# `acomm demo` (and `make demo`): the main job on a machine without modems.
+# Runs the mission of demo/mission.py on the simulated ocean, prints its
+# timeline as it goes and a summary at the end, and writes the per-packet CSV
+# and (with matplotlib) PNG plots to --out. `--json` prints only the summary.
+import json
+import os
+import time
+
+from . import report
+from .mission import Mission
+
+
+def add_arguments(p):
+    p.add_argument("--seed", type=int, default=1, help="the run is the same for the same seed")
+    p.add_argument("--minutes", type=float, default=20, help="simulated minutes (the plan fills 20)")
+    p.add_argument("--out", default="demo-out", help="folder for packets.csv and the plots")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON only")
+    p.add_argument("--no-plots", action="store_true", help="do not draw PNG plots")
+
+
+def main(args):
+    if args.minutes <= 0:
+        print("acomm demo: --minutes must be positive")
+        return 2
+    say = None if args.json else print
+    if say:
+        print("acomm demo: a buoy, a diver and a companion AUV on a simulated acoustic channel")
+        print("            real acomm nodes and SeaTrac drivers against emulated beacons; seed %d, %g minutes"
+              % (args.seed, args.minutes))
+        print()
+    t0 = time.perf_counter()
+    m = Mission(seed=args.seed, minutes=args.minutes, say=say).run()
+    wall = time.perf_counter() - t0
+    s = report.summary(m, wall)
+    os.makedirs(args.out, exist_ok=True)
+    csv = os.path.join(args.out, "packets.csv")
+    m.traffic.log.write_csv(csv)
+    s["csv"] = csv
+    s["plots"] = [] if args.no_plots else report.plots(m, args.out)
+    if args.json:
+        print(json.dumps(s))
+        return 0
+    print()
+    print("summary: %.0f simulated s in %.1f s of wall time (%.0fx)" % (s["simulated_s"], s["wall_s"], s["speedup"] or 0))
+    print()
+    print(report.table(s))
+    print()
+    for key in ("caddy", "log", "alarm", "teleop", "outage", "channel"):
+        if s[key] is not None:
+            print("%-8s %s" % (key, json.dumps(s[key])))
+    if s["discovery_s"] is not None:
+        print("%-8s every node knew every other after %.1f s" % ("discover", s["discovery_s"]))
+    print()
+    print("per-packet log: %s" % csv)
+    if s["plots"]:
+        print("plots: %s" % ", ".join(s["plots"]))
+    elif not args.no_plots:
+        print("plots: none (pip install '.[plot]' for matplotlib)")
+    return 0
