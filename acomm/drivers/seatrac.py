@@ -11,6 +11,10 @@
 # The link sees ready() only through the acoustic slot; housekeeping
 # (keepalive, reboot probes) queues behind or ahead of it on the command
 # slot without ever blocking the link.
+#
+# queue_reply() keeps a packet in the beacon (DAT_QUEUE_SET) for its next
+# automatic reply to a DAT request: an interrogated node answers with data
+# without a transmission of its own (seed 003 section 6).
 
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import ticks_add, ticks_diff
@@ -30,6 +34,8 @@ _COMMANDS = (
     w.CID_SETTINGS_SAVE,
     w.CID_DAT_SEND,
     w.CID_PING_SEND,
+    w.CID_DAT_QUEUE_SET,
+    w.CID_DAT_QUEUE_CLR,
 )
 
 
@@ -92,6 +98,13 @@ class SeatracDriver(SlotDriver):
         self.broadcast_addr = w.BEACON_ALL
         self.config = SeatracConfig(self, beacon_id, set_beacon_id, settings_len, id_offset, retry_ms, reboot_wait_ms)
         self.last_fix = None  # the latest ACO_FIX with a range, as a dict
+        # the reply packet: what the host wants queued (dest, data or None),
+        # whether that still has to be written, what the beacon confirmed
+        self._q_want = None
+        self._q_dirty = False
+        self._q_sent = None
+        self.queued_reply = None
+        self.queue_problem = None  # the CST_E name of a refused DAT_QUEUE_SET
         self.stats = {
             "cmd_timeouts": 0,
             "reboots": 0,
@@ -100,6 +113,7 @@ class SeatracDriver(SlotDriver):
             "malformed": 0,
             "unknown_cid": 0,
             "statuses": 0,
+            "queue_refused": 0,
         }
         self._dec = w.LineDecoder(w.SYNC_RSP, self)
         self._msg = bytearray(w.MAX_MSG)
@@ -153,6 +167,18 @@ class SeatracDriver(SlotDriver):
             return self._refuse("SeaTrac not ready")
         return self._accept(now, K_PING, addr, self.ping_type, b"")
 
+    def queue_reply(self, now, data, dest=w.BEACON_ALL):
+        # The packet for the beacon's next automatic reply to a DAT request
+        # from dest (0: from anyone); None clears it. Written ahead of the
+        # link's next frame: it must be in the beacon before someone asks.
+        if data is not None and len(data) > 31:
+            raise EncodeError("%d bytes exceed the SeaTrac reply packet of 31" % len(data))
+        if not 0 <= dest <= 15:
+            raise EncodeError("SeaTrac beacon id %r outside 0..15" % (dest,))
+        self._q_want = (dest, None if data is None else bytes(data))
+        self._q_dirty = True
+        self._pump(now)
+
     def feed(self, now, data):
         self._now = now
         self._dec.feed(data)
@@ -189,6 +215,18 @@ class SeatracDriver(SlotDriver):
             if self._state == S_CONFIG:
                 self.config.pump(now)
             return
+        if self._q_dirty:
+            self._q_dirty = False
+            self._q_sent = q = self._q_want
+            if q[1] is None:
+                self.command(now, w.CID_DAT_QUEUE_CLR, 1)
+            else:
+                m = self._msg
+                m[1] = q[0]
+                m[2] = len(q[1])
+                m[3 : 3 + len(q[1])] = q[1]
+                self.command(now, w.CID_DAT_QUEUE_SET, 3 + len(q[1]))
+            return
         if self.slot.state == QUEUED and (self._hold_until is None or ticks_diff(now, self._hold_until) >= 0):
             self._hold_until = None
             cid, n = self.slot.build(self._msg)
@@ -207,6 +245,8 @@ class SeatracDriver(SlotDriver):
         self._cmd = 0
         self.stats["cmd_timeouts"] += 1
         self._silent += 1
+        if cid == w.CID_DAT_QUEUE_SET or cid == w.CID_DAT_QUEUE_CLR:
+            self._q_dirty = True  # write it again once the beacon answers
         if self._state == S_CONFIG:
             self.config.failed(now, "no response to command 0x%02X" % cid)
             return
@@ -235,6 +275,8 @@ class SeatracDriver(SlotDriver):
         self._hold_until = None
         self._cmd = 0
         self._probe = False
+        self.queued_reply = None  # the beacon's RAM is gone: queue it again
+        self._q_dirty = self._q_want is not None and self._q_want[1] is not None
         self._state = S_CONFIG
         self.config.start(now)
 
@@ -282,6 +324,13 @@ class SeatracDriver(SlotDriver):
                     self.stats["stale"] += 1
             elif cid == w.CID_SYS_ALIVE and n >= 5:
                 self.uptime(now, w.u32(b, 1))
+            elif cid == w.CID_DAT_QUEUE_SET or cid == w.CID_DAT_QUEUE_CLR:
+                st = b[1] if n >= 2 else w.CST_FAIL  # a trailing DEST_ID is tolerated
+                if st == w.CST_OK:
+                    self.queued_reply = self._q_sent[1]
+                else:
+                    self.stats["queue_refused"] += 1
+                    self.queue_problem = w.status_name(st)
             return
         if cid == w.CID_DAT_RECEIVE:
             self._dat_receive(now, b, n)
@@ -348,6 +397,10 @@ class SeatracDriver(SlotDriver):
         self._events.append((EV_RX, src, dest, bytes(b[k + 2 : k + 2 + plen])))
         if not ack and b[4] in REQ_TYPES and own is not None and dest == own:
             self._answering(now)
+            q = self._q_want
+            if q is not None and q[0] in (w.BEACON_ALL, src) and self.queued_reply is not None:
+                # the beacon's reply took the packet
+                self._q_want = self.queued_reply = None
 
     def _ping_resp(self, b, n):
         if w.fix_len(b, 1, n) < 0:

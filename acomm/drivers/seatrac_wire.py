@@ -35,6 +35,9 @@ CID_PING_ERROR = const(0x43)
 CID_DAT_SEND = const(0x60)
 CID_DAT_RECEIVE = const(0x61)
 CID_DAT_ERROR = const(0x63)
+CID_DAT_QUEUE_SET = const(0x64)  # a packet for the automatic reply to the next DAT request
+CID_DAT_QUEUE_CLR = const(0x65)
+CID_DAT_QUEUE_STATUS = const(0x66)
 
 REBOOT_CHECK = const(0x6A95)  # SYS_REBOOT's guard word
 

@@ -148,5 +148,13 @@ class Medium:
         # noise); the plain medium loses nothing there
         return False
 
+    def arriving(self, dst, src):
+        # when the first bit of a packet from src in flight to dst arrives
+        # (or arrived), or None: a modem may wait for a reply it has begun to hear
+        for item in self._flight:
+            if item[2] == dst and item[3] == src:
+                return item[5]
+        return None
+
     def in_flight(self):
         return len(self._flight)

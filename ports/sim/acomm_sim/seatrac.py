@@ -6,7 +6,9 @@
 # (acomm_sim.medium); the acoustic side lives in seatrac_xcvr.
 #
 # Commands: SYS_ALIVE, SYS_INFO, SYS_REBOOT (check word 0x6A95), STATUS,
-# SETTINGS_GET/SET/LOAD/SAVE/RESET, XCVR_STATUS, PING_SEND, DAT_SEND.
+# SETTINGS_GET/SET/LOAD/SAVE/RESET, XCVR_STATUS, PING_SEND, DAT_SEND,
+# DAT_QUEUE_SET/CLR/STATUS (the reply packet, in seatrac_xcvr; answers:
+# STATUS, STATUS, PACKET_LEN as UNIZG-FER's driver reads them).
 # Input: '#' lines, uppercase hex, CR, LF or both. A line with a bad CRC,
 # bad hex or an unknown CID is dropped without an answer (what real beacons
 # do was not confirmed; see docs/drivers.md).
@@ -61,6 +63,7 @@ class SeatracEmulator(SansIO, FaultModes):
         byte_ms=80,
         turnaround_ms=300,
         range_noise_m=0.0,
+        bearing_noise_deg=0.0,
         seed=1,
         banner=BANNER,
         boot_message=None,
@@ -97,7 +100,8 @@ class SeatracEmulator(SansIO, FaultModes):
         self.commands = {}  # CID -> count, for tests
         self.ignored = 0  # bad lines and unknown commands
         self.xcvr = Transceiver(
-            self, medium, packet_ms, byte_ms, turnaround_ms, range_noise_m, seed, local_flag, hear_all
+            self, medium, packet_ms, byte_ms, turnaround_ms, range_noise_m, seed, local_flag, hear_all,
+            bearing_noise_deg
         )
         medium.attach(beacon_id, self.xcvr)
 
@@ -223,6 +227,14 @@ class SeatracEmulator(SansIO, FaultModes):
             st = self.xcvr.dat_send(now, b, n)
             self.emit(cid, bytes((st, b[1] if n >= 2 else 0)))
             self.xcvr.started(now, st)
+        elif cid == w.CID_DAT_QUEUE_SET:
+            self._status(cid, self.xcvr.queue_set(b, n))
+        elif cid == w.CID_DAT_QUEUE_CLR:
+            self.xcvr.queued = None
+            self._status(cid, w.CST_OK)
+        elif cid == w.CID_DAT_QUEUE_STATUS:
+            q = self.xcvr.queued
+            self._status(cid, len(q[1]) if q is not None else 0)
         else:
             self.ignored += 1
         if self._mute == cid:

@@ -10,9 +10,21 @@
 # its empty reply take the 1.3 s minimum turn-around with 300 ms between).
 # The reply leaves turnaround_ms + xcvr_resp_time after the request's end.
 # The requester gives up after 2 * xcvr_range_tmo / VOS + xcvr_resp_time +
-# turnaround + one empty packet, and reports XCVR_RESP_TIMEOUT.
+# turnaround + one empty packet, and reports XCVR_RESP_TIMEOUT; a reply whose
+# first bit arrived by then is still received to its end (the range timeout
+# is about the signal's return, so a reply carrying data is not cut off; our
+# assumption, the manual does not say).
+#
+# DAT_QUEUE_SET (one packet of 0-31 bytes, for one beacon or any): the
+# packet rides in the automatic reply to the next DAT request of a REQ type
+# from a matching beacon, making that reply byte_ms per byte longer, and is
+# then gone. The reply is made up when the request is heard, so a packet
+# queued while the reply waits its turnaround goes with the next one. PING
+# requests never take it. A beacon with hear_all also reports replies that
+# carry data between two other beacons (DAT_RECEIVE, ACK_FLAG 0): passive
+# listening, as seed 003 section 6 has the third agent do.
 
-from math import atan2, degrees, sqrt
+from math import atan2, cos, degrees, radians, sin, sqrt
 
 from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers import seatrac_wire as w
@@ -45,7 +57,8 @@ def _clamp16(v):
 
 
 class Transceiver:
-    def __init__(self, beacon, medium, packet_ms, byte_ms, turnaround_ms, range_noise_m, seed, local_flag, hear_all):
+    def __init__(self, beacon, medium, packet_ms, byte_ms, turnaround_ms, range_noise_m, seed, local_flag, hear_all,
+                 bearing_noise_deg=0.0):
         self.beacon = beacon
         self.medium = medium
         self.addr = beacon.beacon_id
@@ -53,6 +66,7 @@ class Transceiver:
         self.byte_ms = byte_ms
         self.turnaround_ms = turnaround_ms
         self.range_noise_m = range_noise_m
+        self.bearing_noise_deg = bearing_noise_deg
         self.rng = Prng(seed)
         self.local_flag = local_flag
         self.hear_all = hear_all
@@ -65,6 +79,7 @@ class Transceiver:
         self._pending = None  # [proto, dest, mtype, deadline] awaiting a reply
         self._reply = None  # [due, Packet] our automatic reply
         self._next = None  # the packet a command just accepted
+        self.queued = None  # (dest, data) set with DAT_QUEUE_SET; lost in a restart
 
     # -- timing ------------------------------------------------------------------
     def airtime(self, n):
@@ -120,6 +135,16 @@ class Transceiver:
         self._next = Packet(PROTO_DAT, self.addr, dest, mtype, bytes(b[4 : 4 + ln]))
         return w.CST_OK
 
+    def queue_set(self, b, n):
+        # DAT_QUEUE_SET: DEST_ID, PACKET_LEN, PACKET_DATA (the layout
+        # UNIZG-FER's driver writes); dest 0 lets any beacon's request take it
+        if n < 3 or n - 3 < b[2]:
+            return w.CST_CMD_PARAM_MISSING
+        if n - 3 > b[2] or b[2] > 31 or b[1] > 15:
+            return w.CST_CMD_PARAM_INVALID
+        self.queued = (b[1], bytes(b[3:n]))
+        return w.CST_OK
+
     def started(self, now, status):
         # after the command's status line: put the accepted packet on the air
         p = self._next
@@ -139,9 +164,12 @@ class Transceiver:
         r = self._reply
         if r is not None and ticks_diff(now, r[0]) >= 0:
             self._reply = None
-            self._transmit(r[0], r[1], self.airtime(0))
+            self._transmit(r[0], r[1], self.airtime(len(r[1].data)))
         pd = self._pending
         if pd is not None and ticks_diff(now, pd[3]) >= 0:
+            s = self.medium.arriving(self.addr, pd[1])
+            if s is not None and ticks_diff(s, pd[3]) <= 0:
+                return  # the reply's signal came back in time: hear it out
             self._pending = None
             cid = w.CID_PING_ERROR if pd[0] == PROTO_PING else w.CID_DAT_ERROR
             self.beacon.emit(cid, bytes((w.CST_XCVR_RESP_TIMEOUT, pd[1])))
@@ -163,11 +191,21 @@ class Transceiver:
                 if self._pending is None and self._reply is None:
                     # the firmware answers by itself
                     due = ticks_add(t, self.resp_delay())
-                    self._reply = [due, Packet(p.proto, self.addr, src, p.mtype + 1)]
+                    q = self.queued
+                    data = b""
+                    if p.proto == PROTO_DAT and q is not None and q[0] in (w.BEACON_ALL, src):
+                        data = q[1]
+                        self.queued = None
+                    self._reply = [due, Packet(p.proto, self.addr, src, p.mtype + 1, data)]
+            return
+        if not mine:
+            # someone else's reply: heard only when it carries data
+            if p.proto == PROTO_DAT and p.data and self.hear_all:
+                self._report_dat(p, w.FIX_USBL if (b.usbl and p.mtype != w.MSG_RESP) else 0, dist, 0)
             return
         # a reply: only the beacon that asked, for the beacon it asked
         pd = self._pending
-        if not mine or pd is None or pd[0] != p.proto or pd[1] != src or p.mtype != pd[2] + 1:
+        if pd is None or pd[0] != p.proto or pd[1] != src or p.mtype != pd[2] + 1:
             return
         self._pending = None
         flags = w.FIX_RANGE
@@ -206,13 +244,22 @@ class Transceiver:
         off = self.medium.offset(self.addr, src)
         if off is None:
             off = (0.0, d, 0.0)  # no geometry known: straight ahead, level
+        horiz = sqrt(off[0] * off[0] + off[1] * off[1])
+        az = degrees(atan2(off[0], off[1]))
+        el = degrees(atan2(-off[2], horiz))
+        if flags & w.FIX_USBL and self.bearing_noise_deg:
+            az += (self.rng.below(2001) - 1000) * self.bearing_noise_deg / 1000
+            el += (self.rng.below(2001) - 1000) * self.bearing_noise_deg / 1000
+        if self.range_noise_m or self.bearing_noise_deg:
+            # the position is what the noisy range and angles give
+            h = d * cos(radians(el))
+            off = (h * sin(radians(az)), h * cos(radians(az)), -d * sin(radians(el)))
         if flags & w.FIX_USBL:
-            horiz = sqrt(off[0] * off[0] + off[1] * off[1])
             f.append(4)
             for _ in range(4):
                 f.extend(_le(b.rssi, 2))
-            f.extend(_le(round(degrees(atan2(off[0], off[1])) * 10), 2))
-            f.extend(_le(round(degrees(atan2(-off[2], horiz)) * 10), 2))
+            f.extend(_le(round(az * 10), 2))
+            f.extend(_le(round(el * 10), 2))
             f.extend(_le(0, 2))  # fit error
         if flags & w.FIX_POSITION:
             f.extend(_le(_clamp16(round(off[0] * 10)), 2))
