@@ -6,7 +6,10 @@
 # and link availability. It owns the bounded priority transmit queue, frames
 # payloads (raw acomm frames on links without addressing or integrity, the
 # one-byte elided header on modems that have both), acknowledges frames on
-# raw links, suppresses duplicates, and runs node discovery.
+# raw links, suppresses duplicates, and runs node discovery. The ranging job
+# is in linkrange (a mixin). set_reply() leaves a frame in a modem that
+# answers interrogations by itself; overhear=True hands up DATA frames
+# addressed to other nodes (passive listening), never acknowledging them.
 #
 # The link is non-preemptive and half-duplex: one frame (or ping) is on the
 # air at a time; the next is chosen only when the driver is ready again, so a
@@ -17,11 +20,12 @@
 # at once. Events go to `listener(event_tuple)` (see acomm.events).
 
 from . import frame as fr
-from .caps import CAP_ADDRESSING, CAP_DISCOVERY, CAP_RANGING, CAP_RELIABLE
+from .caps import CAP_ADDRESSING, CAP_DISCOVERY, CAP_RELIABLE
 from .compat import const, ticks_add, ticks_diff
 from .acktable import AckTable
 from .dedup import DuplicateFilter
 from .linkframing import LinkFraming
+from .linkrange import MAX_LIFESPAN_MS, SLOT_IDLE, SLOT_SENDING, Ranging
 from .discovery import Discovery, decode_advert, encode_advert
 from .errors import AcommError, DecodeError
 from .events import (
@@ -34,7 +38,6 @@ from .events import (
     EV_DRIVER_DOWN,
     EV_DRIVER_UP,
     EV_RANGE,
-    EV_RANGE_RECEIVED,
     EV_RECEIVED,
     EV_RX,
     EV_STATUS,
@@ -52,11 +55,9 @@ from .names import AddressMap
 from .txqueue import TxQueue, TxRequest
 
 BROADCAST = "*"  # destination name meaning every node on the link
-_MAX_LIFESPAN_MS = const(1 << 28)  # 3.1 days: the queue's wrap-safe horizon
 _MAX_PENDING_ACKS = const(4)
-
-_IDLE = const(0)
-_SENDING = const(1)  # a frame or ping is on the air
+_IDLE = SLOT_IDLE
+_SENDING = SLOT_SENDING
 
 
 class _Inflight:
@@ -79,7 +80,7 @@ class _Inflight:
         self.kind = 0  # 0 data, 1 advert, 2 link ack, 3 ping
 
 
-class Link:
+class Link(Ranging):
     def __init__(
         self,
         name,
@@ -96,6 +97,7 @@ class Link:
         addr_map=None,
         dup_window_ms=60000,
         ack_window=4,
+        overhear=False,
     ):
         self.name = name
         self.driver = driver
@@ -113,6 +115,7 @@ class Link:
         self.seq_mod = self.framing.seq_mod
         self.max_retries = max_retries
         self.dup_window_ms = dup_window_ms
+        self.overhear = overhear
         if ack_timeout_ms is None:
             # the frame's way there and the ack's way back, with a margin
             ack_timeout_ms = 2 * driver.caps.latency_ms + 1000
@@ -209,8 +212,8 @@ class Link:
         life_ms = int(lifespan_s * 1000)
         if life_ms <= 0:
             return self._refuse(req_id, "lifespan must be positive")
-        if life_ms > _MAX_LIFESPAN_MS:
-            return self._refuse(req_id, "lifespan longer than %d s" % (_MAX_LIFESPAN_MS // 1000))
+        if life_ms > MAX_LIFESPAN_MS:
+            return self._refuse(req_id, "lifespan longer than %d s" % (MAX_LIFESPAN_MS // 1000))
         try:
             dst_id = self._resolve(dst)
         except AcommError as e:
@@ -233,30 +236,19 @@ class Link:
             self._final(out, FAILED, "evicted from a full queue by a higher-priority request")
         return True
 
-    # -- ranging ------------------------------------------------------------------
-    def range(self, now, req_id, names, lifespan_s, priority=2):
-        if not self.driver.caps.has(CAP_RANGING):
-            return self._refuse(req_id, "%s cannot measure range" % self.name)
-        if req_id in self._active:
-            return self._refuse(req_id, "request id %d is already in use" % req_id)
-        life_ms = int(lifespan_s * 1000)
-        if life_ms <= 0 or life_ms > _MAX_LIFESPAN_MS:
-            return self._refuse(req_id, "lifespan must be positive and below %d s" % (_MAX_LIFESPAN_MS // 1000))
-        if not names:
-            return self._refuse(req_id, "no node to range")
-        ids = []
-        for n in names:
-            try:
-                nid = self._resolve(n)
-            except AcommError as e:
-                return self._refuse(req_id, str(e))
-            if nid is None:
-                return self._refuse(req_id, "cannot range the broadcast address")
-            ids.append(nid)
-        req = TxRequest(req_id, None, priority, ticks_add(now, life_ms), b"")
-        # meta: [-2 marks ranging, (ids, results, next index)]
-        req.meta = [-2, (ids, [None] * len(ids), [0])]
-        return self._enqueue(req, now)
+    # -- the modem's automatic reply ----------------------------------------------
+    def set_reply(self, now, payload):
+        # An elided DATA frame (fresh sequence number, to whoever asks) that
+        # the modem sends by itself in its reply to the next interrogation;
+        # None clears it. Raises AcommError where the modem cannot do this.
+        q = getattr(self.driver, "queue_reply", None)
+        if q is None or not self.elided:
+            raise AcommError("%s: the modem cannot queue a reply" % self.name)
+        if payload is not None:
+            if len(payload) > self.mtu_for(0):
+                raise AcommError("%d bytes exceed the %s MTU of %d" % (len(payload), self.name, self.mtu_for(0)))
+            payload = self.framing.encode(fr.DATA, None, self._next_seq(), payload)[1]
+        q(now, payload)
 
     # -- cancellation -------------------------------------------------------------
     def cancel(self, now, req_id, reason="canceled"):
@@ -420,54 +412,6 @@ class Link:
         self.stats["tx_frames"] += 1
         self._status(req.req_id, TRANSMITTING)
 
-    def _ping_next(self, now):
-        fl = self._fl
-        req = fl.req
-        ids, _, idx = req.meta[1]
-        nid = ids[idx[0]]
-        fl.kind = 3
-        fl.state = _SENDING
-        if idx[0] == 0:
-            self._status(req.req_id, TRANSMITTING)
-        self._last_tx = now
-        try:
-            fl.handle = self.driver.ping(now, self.addr_map.addr_of(nid))
-        except AcommError:
-            fl.handle = None
-            self._range_result(now, None)  # this node gets no range; go on
-
-    def _range_result(self, now, metres):
-        fl = self._fl
-        req = fl.req
-        ids, results, idx = req.meta[1]
-        results[idx[0]] = metres
-        idx[0] += 1
-        if fl.canceled:
-            fl.clear()
-            return
-        if idx[0] < len(ids) and ticks_diff(now, req.deadline) < 0:
-            # the job stays in the slot (kind 3, state idle); poll() sends the
-            # next ping when the driver is ready
-            fl.state = _IDLE
-            if self.driver.ready(now):
-                self._ping_next(now)
-            return
-        self._finish_range(req)
-
-    def _finish_range(self, req):
-        ids, results, _ = req.meta[1]
-        self._fl.clear()
-        names = [self.names.name_of(i) for i in ids]
-        self._emit((EV_RANGE_RECEIVED, self, req.req_id, names, results))
-        got = 0
-        for r in results:
-            if r is not None:
-                got += 1
-        if got:
-            self._final(req, DELIVERED, "%d of %d ranges" % (got, len(ids)))
-        else:
-            self._final(req, FAILED, "no range reply")
-
     # -- events from the driver ---------------------------------------------------
     def _handle_driver_events(self, now):
         for ev in self.driver.take_events():
@@ -558,9 +502,11 @@ class Link:
             self._heard(src, now, period)
             return
         self._heard(src, now)
-        if dst is not None and dst != self.node_id:
+        mine = dst is None or dst == self.node_id
+        if not mine:
             self.stats["rx_not_for_us"] += 1
-            return
+            if not self.overhear or f.ftype != fr.DATA:
+                return
         if f.ftype == fr.ACK:
             fl = self._fl
             if fl.state == _SENDING and fl.kind == 0 and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
@@ -575,7 +521,7 @@ class Link:
             return
         if f.ftype != fr.DATA:
             return
-        if f.flags & fr.F_ACK_REQ and dst is not None and len(self._pending_acks) < _MAX_PENDING_ACKS:
+        if mine and f.flags & fr.F_ACK_REQ and dst is not None and len(self._pending_acks) < _MAX_PENDING_ACKS:
             # acknowledge duplicates too: our earlier ack may have been lost
             self._pending_acks.append((src, f.seq))
         if self._dups.seen(src, f.seq, now):
