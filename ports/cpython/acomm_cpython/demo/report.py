@@ -140,7 +140,10 @@ def plots(m, outdir):
 
     fig, ax = plt.subplots(figsize=(8, 4))
     data = [[(r[7] - r[6]) / 1000 for r in rows if r[1] == c and r[7] is not None] for c in classes]
-    ax.boxplot([d or [0] for d in data], labels=classes)
+    # (the keyword for box labels changed name in matplotlib 3.9: set ticks)
+    ax.boxplot([d or [0] for d in data])
+    ax.set_xticks(range(1, len(classes) + 1))
+    ax.set_xticklabels(classes)
     ax.set_yscale("log")
     ax.set_ylabel("latency, s (queued to received)")
     ax.set_title("Latency per traffic class")
@@ -165,7 +168,8 @@ def plots(m, outdir):
         ax.scatter([r[6] / 60000 for r in lost], [i] * len(lost), s=14, c="tab:red", marker="x")
     for start, end, label in _spans(m):
         ax.axvspan(start / 60000, end / 60000, alpha=0.12, color="gray")
-        ax.text(start / 60000, len(classes) - 0.4, label, fontsize=7)
+        ax.text(start / 60000 + 0.05, len(classes) - 0.55, label, fontsize=7)
+    ax.set_ylim(-0.6, len(classes) - 0.3)  # room for the phase names on top
     ax.set_yticks(range(len(classes)))
     ax.set_yticklabels(classes)
     ax.set_xlabel("minutes (queued at; x = never received)")
