@@ -200,9 +200,11 @@ class Link(Ranging):
         return nid
 
     # -- frame transmission request ----------------------------------------------
-    def request(self, now, req_id, dst, data, lifespan_s, priority=10, ack=False):
+    def request(self, now, req_id, dst, data, lifespan_s, priority=10, ack=False, retries=None):
         # Returns True when accepted (status `queued` follows), False when
         # refused (status `failed` with the reason was already emitted).
+        # retries: tries after the first when unacknowledged (None: the
+        # link's max_retries; 0 for a schedule that must not repeat itself).
         if not 0 <= req_id <= 0xFFFF:
             return self._refuse(req_id & 0xFFFF, "request id outside 0..65535")
         if req_id in self._active:
@@ -223,7 +225,7 @@ class Link(Ranging):
             return self._refuse(req_id, "%d bytes exceed the %s MTU of %d" % (len(data), self.name, mtu))
         req = TxRequest(req_id, dst_id, priority, ticks_add(now, life_ms), bytes(data))
         # retries left; a broadcast cannot be acknowledged
-        req.meta = [self.max_retries if (ack and dst_id is not None) else -1, None]
+        req.meta = [(self.max_retries if retries is None else retries) if (ack and dst_id is not None) else -1, None]
         return self._enqueue(req, now)
 
     def _enqueue(self, req, now):

@@ -112,6 +112,9 @@ class MacDriver:
         self.driver = driver
         self.mac = mac
         self.held = 0  # ready() calls answered "not your turn"
+        q = getattr(driver, "queue_reply", None)
+        if q is not None:  # a modem's automatic reply is not under the MAC
+            self.queue_reply = q
 
     @property
     def caps(self):
