@@ -8,6 +8,18 @@
 #   tdma_collisions, aloha_collisions   copies lost to overlapping arrivals
 #   tdma_pdr, aloha_pdr    fraction of (frame, listener) pairs delivered
 # Virtual time; runs on CPython in `acomm bench sim`.
+#
+# Then seed 003's CADDY interrogation cycle (acomm_sim.caddy) on three
+# SeaTrac nodes 47-63 m apart, five simulated minutes (about 35 cycles), with
+# USBL noise (0.2 m range, 1 degree bearing), once with the diver out of
+# Buddy's sonar and once within it (Buddy's longer messages):
+#   caddy_cycle_s                median simulated cycle time
+#   caddy_cycle_budget_s         the seed's 7.24 s (6.1)
+#   caddy_cycle_budget_acomm_s   the seed's formula, 4 x 1.3 s + 80 ms per
+#                                byte, for acomm's bytes with link headers
+#   caddy_cycle_propagation_s    sound's way out and back in the four pairs,
+#                                which the seed's budget leaves out
+#   caddy_cycle_seen_*           the same with the diver in sonar (7.64 s)
 import time
 
 from acomm.mac import Aloha, Tdma
@@ -48,6 +60,49 @@ def run_once(kind, seed=1):
     return w, wall, rx / (sent * (NODES - 1))
 
 
+CADDY_POS = {1: (-35.0, 5.0, 0.5), 2: (25.0, 20.0, 10.0), 3: (10.0, -25.0, 12.0)}
+CADDY_SEEN_DIVER = (30.0, 10.0, 12.0)  # 11 m from Buddy
+
+
+def caddy_run(seen, sim_ms=300000):
+    from acomm.drivers import seatrac_wire as sw
+    from acomm_sim.caddy import CaddyCycle
+
+    pos = dict(CADDY_POS)
+    if seen:
+        pos[3] = CADDY_SEEN_DIVER
+    w = World(seed=3)
+    for name, nid in (("pladypos", 1), ("buddy", 2), ("diver", 3)):
+        emu = {"range_noise_m": 0.2, "bearing_noise_deg": 1.0, "seed": nid}
+        if nid == 3:
+            emu["part"] = sw.PART_X110
+        w.add(name, nid, "seatrac", position=pos[nid], emu_opts=emu, link_opts={"advert_period_ms": 3600000})
+    w.run(20000, until=lambda: all(sn.driver.ready(w.now()) for sn in w.nodes.values()))
+    cyc = CaddyCycle(w, pladypos="pladypos", buddy="buddy", diver="diver").start(w.now())
+    w.run(sim_ms)
+    cyc.stop()
+    t = sorted(cyc.cycle_times_ms)
+
+    def dist(a, b):
+        return sum((pos[a][i] - pos[b][i]) ** 2 for i in range(3)) ** 0.5
+
+    prop = 2 * (dist(1, 3) + dist(2, 1) + dist(2, 3) + dist(1, 2)) / w.channel.sound_speed
+    return cyc, t[len(t) // 2] / 1000, prop
+
+
+def run_caddy(emit):
+    from acomm_sim.caddy import SEED_BUDGET_S, budget_s
+
+    for seen, tag in ((False, ""), (True, "_seen")):
+        cyc, med, prop = caddy_run(seen)
+        emit("caddy_cycle%s_s" % tag, med, "s")
+        emit("caddy_cycle%s_budget_s" % tag, SEED_BUDGET_S[1 if seen else 0], "s")
+        emit("caddy_cycle%s_budget_acomm_s" % tag, budget_s(seen), "s")
+        emit("caddy_cycle%s_propagation_s" % tag, prop, "s")
+        emit("caddy_cycles%s" % tag, cyc.cycles, "cycles")
+        emit("caddy_timeouts%s" % tag, sum(c["timeouts"] for c in cyc.counters), "steps")
+
+
 def run(emit):
     w, wall, pdr = run_once("tdma")
     emit("sim_speedup_16_nodes", SIM_S / wall, "x")
@@ -56,3 +111,4 @@ def run(emit):
     w, wall, pdr = run_once("aloha")
     emit("aloha_collisions", w.channel.collided, "copies")
     emit("aloha_pdr", pdr, "ratio")
+    run_caddy(emit)
