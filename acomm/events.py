@@ -48,6 +48,9 @@ AVAIL_NAMES = {UNKNOWN: "unknown", AVAILABLE: "available", UNAVAILABLE: "unavail
 #                                          else the fix says (bearing,
 #                                          elevation, position, signal level)
 #   (EV_DRIVER_UP,) / (EV_DRIVER_DOWN, reason)   modem (re)configured / lost
+#   (EV_REPLIED,)                          the modem answered an interrogation
+#                                          by itself with the queued reply: the
+#                                          node was heard, as after an advert
 EV_RX = const(1)
 EV_TX_DONE = const(2)
 EV_DELIVERED = const(3)
@@ -55,6 +58,7 @@ EV_TX_FAILED = const(4)
 EV_RANGE = const(5)
 EV_DRIVER_UP = const(6)
 EV_DRIVER_DOWN = const(7)
+EV_REPLIED = const(8)
 
 # Link -> node/application events, passed to the listener as tuples:
 #   (EV_STATUS, link, req_id, status, reason)

@@ -39,6 +39,7 @@ from .events import (
     EV_DRIVER_UP,
     EV_RANGE,
     EV_RECEIVED,
+    EV_REPLIED,
     EV_RX,
     EV_STATUS,
     EV_TX_DONE,
@@ -431,6 +432,10 @@ class Link(Ranging):
                     self._range_result(now, ev[3])
             elif code == EV_DRIVER_UP or code == EV_DRIVER_DOWN:
                 self._check_caps_changed()
+            elif code == EV_REPLIED:
+                # our reply went out: everyone around heard us, so the
+                # advert can wait (a CADDY diver never sends otherwise)
+                self._last_tx = now
 
     def _on_tx_done(self, now, handle):
         fl = self._fl

@@ -19,7 +19,7 @@
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_RX
+from ..events import EV_REPLIED, EV_RX
 from . import seatrac_wire as w
 from .seatrac_config import SeatracConfig
 from .seatrac_slot import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot
@@ -401,6 +401,7 @@ class SeatracDriver(SlotDriver):
             if q is not None and q[0] in (w.BEACON_ALL, src) and self.queued_reply is not None:
                 # the beacon's reply took the packet
                 self._q_want = self.queued_reply = None
+                self._events.append((EV_REPLIED,))
 
     def _ping_resp(self, b, n):
         if w.fix_len(b, 1, n) < 0:

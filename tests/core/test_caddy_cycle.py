@@ -126,3 +126,22 @@ def test_buddy_sends_the_longer_messages_when_it_sees_the_diver():
     n = cyc.cycles
     wd.run(20000)
     assert cyc.cycles == n and wd.nodes["buoy"].node.listener == wd.nodes["buoy"].events.append
+
+
+def test_replies_count_as_being_heard_so_adverts_do_not_cut_into_the_cycle():
+    # With a 30 s advert period the diver, which only ever answers, would
+    # advertise into the cycle; its link takes each reply the beacon sent
+    # (EV_REPLIED) as a transmission, so no advert goes while it cycles.
+    wd = World(seed=3, channel=Recording(seed=3))
+    for name, nid in (("buoy", P), ("auv", B), ("diver", D)):
+        opts = {"part": w.PART_X110} if nid == D else {}
+        wd.add(name, nid, "seatrac", position=POS[nid], link_opts={"advert_period_ms": 30000}, emu_opts=opts)
+    assert wd.run(20000, until=lambda: all(sn.driver.ready(wd.now()) for sn in wd.nodes.values()))
+    wd.run(40000)  # the first adverts go before the cycle starts
+    CaddyCycle(wd, pladypos="buoy", buddy="auv", diver="diver").start(wd.now())
+    t0 = wd.now()
+    wd.run(20000)  # an advert already queued may still go
+    before = wd.channel.collided
+    wd.run(100000)
+    adverts = [a for a in wd.channel.air if a[0] > t0 + 20000 and a[2] == 0]
+    assert adverts == [] and wd.channel.collided == before
