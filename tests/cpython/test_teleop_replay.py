@@ -15,3 +15,12 @@ def test_latency_follows_airtime_and_acomm_is_smaller(monkeypatch):
     far = tw.run_config("fhss", 85.0, "paper")
     # (14 + 10) bytes at 192 bit/s = 1000 ms, plus 57 ms over 85 m
     assert 1057 <= far["latency_median_ms"] <= 1080
+
+
+def test_river_pdr_stays_inside_the_seed_trials():
+    # the calibration: a change to the channel or the generator that moves
+    # the simulated 85 m PDR out of seed 004's river trials must show here
+    for profile in ("bpsk", "fhss"):
+        t1, t2 = tw.SEED[("river", profile)][0]
+        got = tw.run_config(profile, 85.0, "acomm")["pdr"]
+        assert min(t1, t2) <= got <= max(t1, t2), (profile, got, t1, t2)

@@ -45,7 +45,7 @@ DISTANCES = (("lab", 0.6), ("river", 85.0))
 PROFILES = ("bpsk", "fhss")
 # loss probability by range (m), per profile
 LOSS_CURVES = {
-    "bpsk": ((0.0, 0.0), (1.0, 0.002), (85.0, 0.06)),
+    "bpsk": ((0.0, 0.0), (1.0, 0.002), (85.0, 0.08)),
     "fhss": ((0.0, 0.0), (1.0, 0.004), (85.0, 0.10)),
 }
 # seed 004 Table II: (PDR % T1, T2), (median latency ms T1, T2), (median jitter ms T1, T2)
