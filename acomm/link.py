@@ -125,7 +125,7 @@ class Link(Ranging):
         self._acks = AckTable(ack_window)
         self._dups = DuplicateFilter(dup_window_ms)
         self._active = {}  # req_id -> TxRequest, accepted and not yet final
-        self._seq = 0
+        self._seqs = {}  # destination id (None: broadcast) -> next sequence number
         self._last_tx = None
         self._pending_acks = []  # (dst_id, seq) link acks to send first
         self._caps = None
@@ -342,9 +342,16 @@ class Link(Ranging):
             self._final(req, FAILED, reason)
 
     # -- transmission -------------------------------------------------------------
-    def _next_seq(self):
-        s = self._seq
-        self._seq = (s + 1) % self.seq_mod
+    def _next_seq(self, dst_id=None):
+        # One counter per destination: a receiver then sees consecutive
+        # numbers from us, so its duplicate filter (a few recent numbers
+        # per source) never mistakes a new frame for a copy of one sent 16
+        # frames earlier because the frames to other nodes in between
+        # advanced a shared counter. Broadcasts and modem replies (to
+        # whoever asks) share the None counter. At most 256 entries: node
+        # ids are 0..254.
+        s = self._seqs.get(dst_id, 0)
+        self._seqs[dst_id] = (s + 1) % self.seq_mod
         return s
 
     def _send_control(self, now, kind, ftype, dst_id, seq, payload):
@@ -394,10 +401,10 @@ class Link(Ranging):
         # a retry keeps its sequence number so the receiver can drop the copy
         seq = req.meta[1]
         if seq is None:
-            seq = self._next_seq()
+            seq = self._next_seq(req.dst)
             if want_ack:
                 while self._acks.seq_in_use(req.dst, seq):
-                    seq = self._next_seq()
+                    seq = self._next_seq(req.dst)
             req.meta[1] = seq
         flags = fr.F_ACK_REQ if (want_ack and not self.modem_acks) else 0
         try:
