@@ -1,7 +1,8 @@
-# Duplicate suppression at the receiver: a frame whose (source, sequence)
+# Duplicate suppression at the receiver: a frame whose (key, sequence)
 # was seen within the last `window_ms` is a copy (a retry whose first
-# acknowledgement was lost, or an echo). Memory is bounded: `slots` recent
-# sequence numbers per source, and at most `max_sources` sources (beyond that
+# acknowledgement was lost, or an echo). The link's key is the source and
+# destination (senders number frames per destination). Memory is bounded: `slots` recent
+# sequence numbers per key, and at most `max_sources` keys (beyond that
 # the table starts afresh, which can only let a copy through, never drop new
 # data).
 

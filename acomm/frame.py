@@ -27,13 +27,15 @@ from .errors import CRCError, DecodeError, EncodeError
 
 VERSION = const(1)
 
-# Frame types (3 bits). 5..7 are free for later use; decoders pass them up and
-# the layers above ignore types they do not know.
+# Frame types (3 bits). 7 is free for later use; decoders pass unknown types
+# up and the layers above ignore them.
 DATA = const(0)
 ACK = const(1)
 ADVERT = const(2)
 RANGE = const(3)
 CONTROL = const(4)
+SEGMENT = const(5)  # the transport's fragments and selective acknowledgements
+REPLY = const(6)  # DATA that a modem sent by itself when interrogated
 
 # Flags (4 bits).
 F_ACK_REQ = const(8)

@@ -250,7 +250,7 @@ class Link(Ranging):
         if payload is not None:
             if len(payload) > self.mtu_for(0):
                 raise AcommError("%d bytes exceed the %s MTU of %d" % (len(payload), self.name, self.mtu_for(0)))
-            payload = self.framing.encode(fr.DATA, None, self._next_seq(), payload)[1]
+            payload = self.framing.encode(fr.REPLY, None, self._next_seq(), payload)[1]
         q(now, payload)
 
     # -- cancellation -------------------------------------------------------------
@@ -517,9 +517,10 @@ class Link(Ranging):
             return
         self._heard(src, now)
         mine = dst is None or dst == self.node_id
+        data = f.ftype == fr.DATA or f.ftype == fr.REPLY
         if not mine:
             self.stats["rx_not_for_us"] += 1
-            if not self.overhear or f.ftype != fr.DATA:
+            if not self.overhear or not data:
                 return
         if f.ftype == fr.ACK:
             fl = self._fl
@@ -533,12 +534,18 @@ class Link(Ranging):
             if req is not None:
                 self._final(req, DELIVERED)
             return
-        if f.ftype != fr.DATA:
+        if not data:
             return
         if mine and f.flags & fr.F_ACK_REQ and dst is not None and len(self._pending_acks) < _MAX_PENDING_ACKS:
             # acknowledge duplicates too: our earlier ack may have been lost
             self._pending_acks.append((src, f.seq))
-        if self._dups.seen(src, f.seq, now):
+        # senders number frames per destination (_next_seq), and modem
+        # replies and broadcasts on one more counter: one filter key each
+        if f.ftype == fr.REPLY:
+            key = src * 257 + 256
+        else:
+            key = src * 257 + (255 if dst is None else dst)
+        if self._dups.seen(key, f.seq, now):
             self.stats["rx_duplicates"] += 1
             return
         self._emit(
