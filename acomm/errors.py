@@ -23,3 +23,15 @@ class EncodeError(AcommError):
     # bits for the buffer. Raised instead of truncating silently (MicroPython's
     # struct would truncate).
     pass
+
+
+class StoreError(AcommError):
+    # The persistent store cannot do what was asked: the file is not a store,
+    # the store is closed, a setting is out of range.
+    pass
+
+
+class StoreFull(StoreError):
+    # put() would take the store past its capacity even after compaction.
+    # The caller refuses the new packet; nothing already stored is dropped.
+    pass
