@@ -71,3 +71,11 @@ EV_RECEIVED = const(21)
 EV_AVAILABILITY = const(22)
 EV_CAPS = const(23)
 EV_RANGE_RECEIVED = const(24)
+# Link -> transport (the node hands these to its transport, not to the
+# application): (EV_SEGMENT, link, src_id, dst_id or None, payload)
+EV_SEGMENT = const(25)
+# Transport -> application:
+#   (EV_PACKET_STATUS, pid, status, reason)   statuses as for requests
+#   (EV_PACKET, src_name, dst_name, data)     a whole packet arrived
+EV_PACKET_STATUS = const(26)
+EV_PACKET = const(27)

@@ -39,6 +39,7 @@ from .events import (
     EV_DRIVER_UP,
     EV_RANGE,
     EV_RECEIVED,
+    EV_SEGMENT,
     EV_REPLIED,
     EV_RX,
     EV_STATUS,
@@ -201,11 +202,12 @@ class Link(Ranging):
         return nid
 
     # -- frame transmission request ----------------------------------------------
-    def request(self, now, req_id, dst, data, lifespan_s, priority=10, ack=False, retries=None):
+    def request(self, now, req_id, dst, data, lifespan_s, priority=10, ack=False, retries=None, ftype=fr.DATA):
         # Returns True when accepted (status `queued` follows), False when
         # refused (status `failed` with the reason was already emitted).
         # retries: tries after the first when unacknowledged (None: the
         # link's max_retries; 0 for a schedule that must not repeat itself).
+        # ftype: DATA for applications, SEGMENT for the transport.
         if not 0 <= req_id <= 0xFFFF:
             return self._refuse(req_id & 0xFFFF, "request id outside 0..65535")
         if req_id in self._active:
@@ -226,7 +228,7 @@ class Link(Ranging):
             return self._refuse(req_id, "%d bytes exceed the %s MTU of %d" % (len(data), self.name, mtu))
         req = TxRequest(req_id, dst_id, priority, ticks_add(now, life_ms), bytes(data))
         # retries left; a broadcast cannot be acknowledged
-        req.meta = [(self.max_retries if retries is None else retries) if (ack and dst_id is not None) else -1, None]
+        req.meta = [(self.max_retries if retries is None else retries) if (ack and dst_id is not None) else -1, None, ftype]
         return self._enqueue(req, now)
 
     def _enqueue(self, req, now):
@@ -408,7 +410,7 @@ class Link(Ranging):
             req.meta[1] = seq
         flags = fr.F_ACK_REQ if (want_ack and not self.modem_acks) else 0
         try:
-            addr, data = self.framing.encode(fr.DATA, req.dst, seq, req.data, flags)
+            addr, data = self.framing.encode(req.meta[2], req.dst, seq, req.data, flags)
             fl.handle = d.send(now, addr, data, want_ack and self.modem_acks)
         except AcommError as e:
             fl.clear()
@@ -517,6 +519,11 @@ class Link(Ranging):
             return
         self._heard(src, now)
         mine = dst is None or dst == self.node_id
+        if f.ftype == fr.SEGMENT:
+            # the transport's: it numbers and acknowledges its own fragments
+            if mine:
+                self._emit((EV_SEGMENT, self, src, dst, f.payload))
+            return
         data = f.ftype == fr.DATA or f.ftype == fr.REPLY
         if not mine:
             self.stats["rx_not_for_us"] += 1

@@ -9,7 +9,7 @@
 # CPython port's serial and socket adapters.
 
 from .compat import const, ticks_ms
-from .events import EV_STATUS, is_final
+from .events import EV_SEGMENT, EV_STATUS, is_final
 from .link import Link
 from .names import NameTable
 
@@ -33,6 +33,10 @@ class Node:
         # them; bounded: the oldest are dropped (and counted) beyond the cap.
         self.backlog = []
         self.backlog_dropped = 0
+        # the transport (acomm.transport.Transport) sets itself here: it gets
+        # the links' SEGMENT frames and the statuses of its own requests
+        self.transport = None
+        self._now = 0
 
     def add_link(self, name, driver, stream=None, **options):
         link = Link(name, driver, self.node_id, self.names, self._on_event, **options)
@@ -49,6 +53,14 @@ class Node:
         return self._req_id
 
     def _on_event(self, ev):
+        t = self.transport
+        if t is not None:
+            code = ev[0]
+            if code == EV_SEGMENT:
+                t.on_segment(self._now, ev[1], ev[2], ev[3], ev[4])
+                return
+            if code == EV_STATUS and t.on_link_status(self._now, ev[2], ev[3], ev[4]):
+                return
         if self.listener is not None:
             self.listener(ev)
             return
@@ -72,6 +84,9 @@ class Node:
     def step(self, now=None):
         if now is None:
             now = self.clock()
+        self._now = now
+        if self.transport is not None:
+            self.transport.poll(now)  # its fragments join the link queues first
         for name in self.links:
             link = self.links[name]
             stream = self._streams[name]

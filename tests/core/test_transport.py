@@ -1,0 +1,120 @@
+# The transport (acomm.transport, acomm.arq, acomm.segment) on the real
+# stack: SeaTrac nodes in a simulated World. Fragmentation and reassembly,
+# selective repeat under loss, a relay over two hops, priorities on two
+# lanes, expiry, recovery from the store after a restart, and the segment
+# codec's refusals of bad input.
+from acomm import segment as sg
+from acomm.arq import Outgoing, Reassembly
+from acomm.errors import DecodeError
+from acomm.events import DELIVERED, EV_PACKET, EV_PACKET_STATUS, EXPIRED, QUEUED, TRANSMITTED
+from acomm.prng import Prng
+from acomm.transport import MemoryStore, Transport
+from acomm_sim.channel import Channel
+from acomm_sim.world import World
+from checks import raises
+
+
+def net(loss=0.0, relay=False, seed=1):
+    curve = ((0.0, 0.0), (200.0, 0.0), (201.0, 1.0)) if relay else None
+    w = World(seed=seed, channel=Channel(seed=seed, loss=loss, loss_curve=curve))
+    lo = {"advert_period_ms": 600000}
+    a = w.add("diver", 2, "seatrac", position=(0, 0, 10), link_opts=lo)
+    b = w.add("buoy", 1, "seatrac", position=(300 if relay else 150, 0, 0), link_opts=lo)
+    c = w.add("auv", 3, "seatrac", position=(150, 0, 5), link_opts=lo) if relay else None
+    wall = lambda: w.now() // 1000  # noqa: E731
+    routes = {"buoy": "auv"} if relay else None
+    ta = Transport(a.node, routes=routes, wall=wall)
+    Transport(b.node, routes={"diver": "auv"} if relay else None, wall=wall)
+    if c is not None:
+        Transport(c.node, wall=wall)
+    w.run(15000)
+    return w, a, b, c, ta
+
+
+def packets(sn):
+    return [e for e in sn.events if e[0] == EV_PACKET]
+
+
+def statuses(sn, pid):
+    return [e[2] for e in sn.events if e[0] == EV_PACKET_STATUS and e[1] == pid]
+
+
+def test_a_packet_of_many_fragments_arrives_whole_under_loss():
+    w, a, b, _, ta = net(loss=0.1)
+    data = Prng(5).bytes(600)  # random: no compression, 23 fragments
+    pid = ta.send(w.now(), "buoy", data, 3600, 5)
+    assert w.run(1200000, until=lambda: DELIVERED in statuses(a, pid))
+    got = packets(b)
+    assert len(got) == 1 and got[0][1:] == ("diver", "buoy", data)
+    assert statuses(a, pid) == [QUEUED, DELIVERED]
+    # selective repeat: roughly the lost ones again, not whole windows
+    assert ta.stats["fragments"] < 23 * 1.6 and ta.stats["resent"] <= 4
+
+
+def test_text_is_compressed_and_comes_out_the_same():
+    w, a, b, _, ta = net()
+    text = b"".join(b"t%02d.%02d depth %4.1fm air %3d\n" % (k // 2, k % 2 * 30, 8 + k * 0.4, 200 - k) for k in range(20))
+    pid = ta.send(w.now(), "buoy", text, 3600, 5)
+    assert w.run(1200000, until=lambda: DELIVERED in statuses(a, pid))
+    assert packets(b)[0][3] == text
+    try:
+        import acomm.compress  # noqa: F401
+    except ImportError:
+        return
+    assert ta.stats["fragments"] < (len(text) + 4) // 27  # fewer than uncompressed would need
+
+
+def test_relay_over_two_hops_stores_and_forwards():
+    w, a, b, c, ta = net(relay=True)
+    data = Prng(7).bytes(200)
+    pid = ta.send(w.now(), "buoy", data, 3600, 5)
+    assert w.run(1200000, until=lambda: packets(b))
+    assert packets(b)[0][1:] == ("diver", "buoy", data)  # the origin, not the relay
+    assert statuses(a, pid)[-1] == TRANSMITTED  # custody went to the auv
+    assert c.node.transport.stats["relayed"] == 1 and not packets(c)
+
+
+def test_an_urgent_packet_overtakes_a_long_one_on_the_other_lane():
+    w, a, b, _, ta = net()
+    big = ta.send(w.now(), "buoy", Prng(3).bytes(1500), 3600, 12)
+    w.run(20000)
+    alarm = ta.send(w.now(), "buoy", b"low air!", 600, 1)
+    assert w.run(1200000, until=lambda: DELIVERED in statuses(a, big))
+    order = [e[3] for e in packets(b)]
+    assert order[0] == b"low air!" and len(order) == 2
+    assert statuses(a, alarm) == [QUEUED, DELIVERED]
+
+
+def test_expiry_and_recovery_from_the_store():
+    store = MemoryStore()
+    w = World(seed=4)
+    a = w.add("diver", 2, "seatrac", position=(0, 0, 10))
+    w.add("buoy", 1, "seatrac", position=(100, 0, 0))
+    wall = lambda: w.now() // 1000  # noqa: E731
+    t = Transport(a.node, store=store, wall=wall)
+    p1 = t.send(w.now(), "buoy", b"one", 5, 5)
+    p2 = t.send(w.now(), "buoy", b"two", 3600, 5)
+    assert len(store.keys()) == 2
+    # the node restarts before anything went: a new transport on the same store
+    a.node.transport = None
+    t2 = Transport(a.node, store=store, wall=wall)
+    assert sorted(t2.pending()) == sorted([p1, p2])
+    assert t2.send(w.now(), "buoy", b"three", 60, 5) not in (p1, p2)  # ids are not reused
+    w.run(8000)
+    assert EXPIRED in statuses(a, p1) and p1 not in t2.pending()
+
+
+def test_segments_and_fragments_refuse_bad_input():
+    for bad in (b"", b"\x80", b"\xc0\x05\x00", b"\x80\x00" + b"\xff" * 9, b"\xc0\x00\x01\x02"):
+        raises(DecodeError, sg.decode, bad)
+    raises(DecodeError, sg.decode_packet_header, b"\x01\x00\x01\x05")  # unknown flag bits
+    raises(DecodeError, sg.decode_packet_header, b"\x00\x00\x01\x85")  # length runs on
+    r = Reassembly(0, 100, 0)
+    raises(DecodeError, r.add, 0, sg.packet_header(1, 500) + b"x" * 20, 0)  # declares too much
+    r = Reassembly(0, 1000, 0)
+    r.add(0, sg.packet_header(1, 40) + b"x" * 20, 0)  # 24 + 20 bytes: 2 fragments of 24
+    raises(DecodeError, r.add, 5, b"y" * 10, 0)  # beyond the count
+    o = Outgoing(sg.packet_header(9, 100) + bytes(100), 27, 0, 1, 9)
+    o.new_round()
+    assert not o.on_sack(sg.decode(sg.sack_complete(0, 1, o.count, 8)))  # someone else's packet
+    assert o.on_sack(sg.decode(sg.sack(0, 1, 2, b"\x01"))) and o.base == 2 and o.acked[3] and not o.acked[2]
