@@ -21,6 +21,7 @@ BENCHES = {
     "codec": "codec_workload",
     "sim": "sim_workload",
     "teleop": "teleop_workload",
+    "store": "store_workload",
 }
 
 
