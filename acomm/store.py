@@ -26,8 +26,11 @@
 #                      bytes pass half the file (and 256 bytes).
 #   s.close()          (also a context manager)
 #
-# sync=False skips fsync/os.sync after each write (flush only): still safe
-# against a killed process, not against a power cut.
+# sync=True (CPython) fsyncs each record, the temporary file of a compaction
+# and the directory after its rename; sync=False only flushes to the OS:
+# safe against a killed process, not a power cut. On MicroPython flush()
+# itself commits (lfs/FAT sync; fsync on the unix port), and sync=True adds
+# os.sync() where the port has it.
 #
 # The file is a 4-byte header and an append-only log of checksummed records
 # (byte layout in docs/wire-format.md, "Store records"). RAM holds only an
@@ -243,7 +246,8 @@ class Store:
         self._f = None
         try:
             _replace(self._tmp, self.path)
-            _sync_dir(self.path)
+            if self._sync:
+                _sync_dir(self.path)
         finally:
             self._f = open(self.path, "r+b")
         self._keys = keys
@@ -284,7 +288,8 @@ class Store:
         f.write(MAGIC)
         self._flush(f)
         f.close()
-        _sync_dir(self.path)
+        if self._sync:
+            _sync_dir(self.path)
 
     def _append_record(self, hdr, data, crc):
         # Three writes, not one concatenation: no second copy of the data

@@ -373,3 +373,15 @@ def test_garbage_between_records_is_skipped():
         _check(s, OrderedDict(((1, _data(1)), (2, _data(2)))))
         assert s.stats["corrupt_dropped"] == 1 and s.dead_bytes == len(junk)
         s.close()
+
+
+def test_record_bytes_as_documented():
+    # docs/wire-format.md, "Store records", example
+    with _Dir() as d:
+        s = Store(d.file())
+        s.put(7, b"hi")
+        s.delete(7)
+        s.close()
+        assert _read(d.file()) == MAGIC + bytes.fromhex(
+            "a55007000000020068695411" "2fe7" "a544070000000000" "5357ce2a"
+        )
