@@ -19,6 +19,7 @@ BENCHES = {
     "queue": "queue_workload",
     "discovery": "discovery_workload",
     "codec": "codec_workload",
+    "fec": "fec_workload",
     "sim": "sim_workload",
     "teleop": "teleop_workload",
     "store": "store_workload",
