@@ -22,6 +22,7 @@ BENCHES = {
     "fec": "fec_workload",
     "sim": "sim_workload",
     "teleop": "teleop_workload",
+    "transfer": "transfer_workload",
     "store": "store_workload",
 }
 
