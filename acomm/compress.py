@@ -3,9 +3,10 @@
 # MicroPython's deflate module only decompresses on most boards, and a buoy
 # must compress what it forwards, so acomm carries its own format: a bit
 # stream of literals and back-references with Elias-gamma lengths and
-# offsets and a "repeat the last offset" token (records and log lines repeat
-# their layout at a fixed distance, so after a changed digit the copy goes on
-# from the same offset for 2 bits plus the length). docs/wire-format.md,
+# offsets, and short tokens that repeat one of the four most recent offsets
+# (records and log lines repeat their layout at a fixed distance, so after a
+# changed digit the copy goes on from the same offset for 3 bits plus the
+# length). 7-bit literals when the data is ASCII. docs/wire-format.md,
 # "Compression", has the byte and bit layout.
 #
 # Interface (used by the store-and-forward transport):
@@ -21,10 +22,13 @@
 #       output would be longer than max_out. The output length is in the
 #       header and is checked before anything is allocated, so a
 #       decompression bomb costs nothing; working memory is the output
-#       buffer only.
+#       buffer and the bytes copy returned (2 * n at the peak).
+#       Compression does not detect damage: a corrupted stream may decode
+#       to wrong bytes of a valid length; the transport's CRC guards that.
 #
 # RAM while compressing: two tables of 16-bit positions (HASH_SIZE +
-# WINDOW entries = 2.5 KiB) and one output buffer of len(data) bytes.
+# WINDOW entries = 2.5 KiB, allocated at the first call and reused) and
+# one output buffer of len(data) + 2 bytes.
 # Work per input byte is bounded: at most MAX_CHAIN candidates, each
 # compared for at most MAX_MATCH bytes, and a candidate's compare length is
 # consumed by the match it wins.
@@ -36,12 +40,11 @@ from .errors import DecodeError
 
 # The compressor's window. The transport compresses one packet at a time
 # (typically under 2 KiB) and log lines or records repeat within a few
-# hundred bytes, so a larger window would find little more while the chain
+# hundred bytes: 2048 saved 2 % more on the 2 KiB dive log while the chain
 # table grows by 2 bytes per position. The format itself allows any offset
-# back to the start of the output.
+# back to the start of the output, up to 65535.
 WINDOW = const(1024)
 _WMASK = const(1023)
-HASH_BITS = const(8)
 HASH_SIZE = const(256)
 _HMASK = const(255)
 MAX_CHAIN = const(8)
@@ -60,6 +63,8 @@ _OFF_LO_MASK = const(63)
 # repeat of the 1st..4th most recent offset.
 _REP_CODE = (6, 14, 30, 31)
 _REP_COST = (3, 4, 5, 5)
+# the four most recent offsets, most recent first, before any match
+_REPS0 = (1, 2, 3, 4)
 
 MODE_STORED = const(0)
 MODE_LZ8 = const(1)  # literals are 8 bits
@@ -107,9 +112,9 @@ class _Overflow(Exception):
 class _BitOut:
     # MSB-first bit writer into a preallocated buffer. put() takes at most
     # 22 bits so the accumulator stays a small int on a 32-bit MCU.
-    def __init__(self, buf):
+    def __init__(self, buf, pos):
         self.buf = buf
-        self.pos = 0
+        self.pos = pos
         self.acc = 0
         self.nacc = 0
 
@@ -156,27 +161,50 @@ def _hash(data, i):
     return ((data[i] << 5) ^ (data[i + 1] << 2) ^ data[i + 2] ^ (data[i] >> 3)) & _HMASK
 
 
+# The hash and chain tables of the last compress(), kept so that a node that
+# compresses every packet does not allocate (and fragment) 2.5 KiB each time.
+# Taken out while in use, so a second, concurrent caller (a thread on
+# CPython) allocates its own instead of sharing them.
+_spare = None
+
+
+def _take_tables():
+    global _spare
+    t = _spare
+    _spare = None
+    if t is None:
+        return (array("H", bytes(2 * HASH_SIZE)), array("H", bytes(2 * WINDOW)))
+    # cleared so the output never depends on an earlier call
+    head, chain = t
+    for j in range(HASH_SIZE):
+        head[j] = 0
+    for j in range(WINDOW):
+        chain[j] = 0
+    return t
+
+
 def compress(data):
+    global _spare
     n = len(data)
     lit7 = True
     for b in data:
         if b & 0x80:
             lit7 = False
             break
-    mode = MODE_LZ7 if lit7 else MODE_LZ8
-    hdr = _header(n, mode)
     if n > 2:
+        hdr = _header(n, MODE_LZ7 if lit7 else MODE_LZ8)
+        # room for the header and a body one byte shorter than the data
+        buf = bytearray(len(hdr) + n - 1)
+        buf[: len(hdr)] = hdr
+        tables = _take_tables()
         try:
-            body = _lz(data, n, 7 if lit7 else 8)
-            return bytes(hdr) + body
+            k = _Parser(data, n, 7 if lit7 else 8, buf, len(hdr), tables).run()
+            return bytes(memoryview(buf)[:k])
         except _Overflow:
-            pass
-    hdr = _header(n, MODE_STORED)
-    return bytes(hdr) + bytes(data)
-
-
-def _lz(data, n, litk):
-    return _Parser(data, n, litk).run()
+            buf = None
+        finally:
+            _spare = tables
+    return bytes(_header(n, MODE_STORED)) + bytes(data)
 
 
 class _Parser:
@@ -186,15 +214,13 @@ class _Parser:
     # offers a larger saving, a literal goes first. find() leaves its answer
     # in attributes rather than a tuple so the loop allocates nothing.
 
-    def __init__(self, data, n, litk):
+    def __init__(self, data, n, litk, buf, start, tables):
         self.data = data
         self.n = n
         self.litk = litk
-        self.out = _BitOut(bytearray(n - 1))
-        self.head = array("H", bytes(2 * HASH_SIZE))
-        self.chain = array("H", bytes(2 * WINDOW))
-        # the four most recent distinct offsets, most recent first
-        self.r0, self.r1, self.r2, self.r3 = 1, 2, 3, 4
+        self.out = _BitOut(buf, start)
+        self.head, self.chain = tables
+        self.reps = array("H", _REPS0)
         self.best = self.gain = self.off = 0
         self.rep = -1
 
@@ -213,15 +239,18 @@ class _Parser:
         if limit > MAX_MATCH:
             limit = MAX_MATCH
         if limit >= 2:
-            j = 0
-            for d in (self.r0, self.r1, self.r2, self.r3):
+            reps = self.reps
+            for j in range(4):
+                d = reps[j]
                 if d <= i:
                     k = _match_len(data, i, i - d, limit)
                     if k >= 2:
                         g = k * litcost - _REP_COST[j] - _gamma_bits(k - 1)
                         if g > gain:
-                            best, gain, off, rep = k, g, d, j
-                j += 1
+                            best = k
+                            gain = g
+                            off = d
+                            rep = j
         if limit >= 3:
             chain = self.chain
             cand = i - ((i - self.head[_hash(data, i)]) & 0xFFFF)
@@ -233,12 +262,19 @@ class _Parser:
                     d = i - cand
                     g = k * litcost - 2 - _offset_bits(d) - _gamma_bits(k - 1)
                     if g > gain:
-                        best, gain, off, rep = k, g, d, -1
+                        best = k
+                        gain = g
+                        off = d
+                        rep = -1
                 nxt = cand - ((cand - chain[cand & _WMASK]) & 0xFFFF)
                 if nxt >= cand:
                     break
                 cand = nxt
-        self.best, self.gain, self.off, self.rep = best, gain, off, rep
+        # attributes, not a returned tuple: nothing allocated per position
+        self.best = best
+        self.gain = gain
+        self.off = off
+        self.rep = rep
 
     def run(self):
         data = self.data
@@ -250,7 +286,10 @@ class _Parser:
             self.find(i)
             if i <= n - 3:
                 self.insert(i)
-            best, gain, off, rep = self.best, self.gain, self.off, self.rep
+            best = self.best
+            gain = self.gain
+            off = self.off
+            rep = self.rep
             if best and best < LAZY_BELOW and i + 1 < n:
                 self.find(i + 1)
                 if self.gain > gain:
@@ -268,8 +307,7 @@ class _Parser:
             while j < stop:
                 self.insert(j)
                 j += 1
-        k = out.flush()
-        return bytes(memoryview(out.buf)[:k])
+        return out.flush()
 
     def emit(self, length, off, rep):
         out = self.out
@@ -278,16 +316,21 @@ class _Parser:
             v = off - 1
             out.gamma((v >> _OFF_LO) + 1)
             out.put(v & _OFF_LO_MASK, _OFF_LO)
-            self.r0, self.r1, self.r2, self.r3 = off, self.r0, self.r1, self.r2
+            self.reps[3] = off
+            _to_front(self.reps, 3)
         else:
             out.put(_REP_CODE[rep], _REP_COST[rep])
-            if rep == 1:
-                self.r0, self.r1 = self.r1, self.r0
-            elif rep == 2:
-                self.r0, self.r1, self.r2 = self.r2, self.r0, self.r1
-            elif rep == 3:
-                self.r0, self.r1, self.r2, self.r3 = self.r3, self.r0, self.r1, self.r2
+            _to_front(self.reps, rep)
         out.gamma(length - 1)
+
+
+def _to_front(reps, j):
+    # recent offsets: move entry j to the front, shifting the others back
+    d = reps[j]
+    while j:
+        reps[j] = reps[j - 1]
+        j -= 1
+    reps[0] = d
 
 
 class _BitIn:
@@ -354,7 +397,7 @@ def decompress(data, max_out):
     out = bytearray(n)
     mv = memoryview(out)
     bits = _BitIn(data, p)
-    r0, r1, r2, r3 = 1, 2, 3, 4
+    reps = array("H", _REPS0)
     i = 0
     while i < n:
         if not bits.get(1):
@@ -363,29 +406,30 @@ def decompress(data, max_out):
             continue
         if not bits.get(1):
             off = (((bits.gamma() - 1) << _OFF_LO) | bits.get(_OFF_LO)) + 1
-            r0, r1, r2, r3 = off, r0, r1, r2
-        elif not bits.get(1):
-            off = r0
-        elif not bits.get(1):
-            off = r1
-            r0, r1 = r1, r0
-        elif not bits.get(1):
-            off = r2
-            r0, r1, r2 = r2, r0, r1
+            if off > 0xFFFF:  # no valid stream has one (window < 64 KiB)
+                raise DecodeError("compressed: offset too large")
+            reps[3] = off
+            _to_front(reps, 3)
         else:
-            off = r3
-            r0, r1, r2, r3 = r3, r0, r1, r2
+            j = 0  # 110, 1110, 11110, 11111: repeat 0..3
+            while j < 3 and bits.get(1):
+                j += 1
+            off = reps[j]
+            _to_front(reps, j)
         k = bits.gamma() + 1
         if off > i:
             raise DecodeError("compressed: reference before the start")
         if k > n - i:
             raise DecodeError("compressed: match runs past the stated length")
         s = i - off
-        if off >= k:
+        if off >= k and k >= 32:
+            # one block copy; the two views it allocates only pay off on
+            # long copies
             mv[i : i + k] = mv[s : s + k]
             i += k
         else:
-            # overlapping copy: each byte may be one this match just wrote
+            # short or overlapping copy, byte by byte: in an overlapping one
+            # each byte may be one this match just wrote
             e = i + k
             while i < e:
                 out[i] = out[s]
