@@ -282,7 +282,11 @@ class Transport:
         del self._reqs[rid]
         p, index, poll = r
         if p is None:
-            return True  # a SACK of ours
+            # a SACK of ours; a modem that refused it (busy acknowledging
+            # the fragment it just received) gets it again, twice at most
+            if status == FAILED and index[3] < 2:
+                self._sack(now, index[0], index[1], index[2], index[3] + 1)
+            return True
         p.inflight -= 1
         if p.out is not None and poll:
             if status == TRANSMITTED:
@@ -385,7 +389,7 @@ class Transport:
         names = self.node.names
         self._emit((EV_PACKET, names.name_of(origin), names.name_of(final), data))
 
-    def _sack(self, now, link, src, data):
+    def _sack(self, now, link, src, data, tries=0):
         rid = self.node.next_req_id()
         if link.request(now, rid, self.node.names.name_of(src), data, 60, _SACK_PRIORITY, False, None, SEGMENT):
-            self._reqs[rid] = (None, 0, 0)
+            self._reqs[rid] = (None, (link, src, data, tries), 0)

@@ -24,9 +24,8 @@ from acomm_sim.world import World
 PER_RUNTIME = ()
 SIZE = 4096
 LOSSES = (0.0, 0.1, 0.2)
-# EvoLogics is left out for now: at 20 % loss its transfer stalled in a
-# first try, and the ideal needs the driver's burst airtime model (the
-# figure came out above 1). Both are open work of the transport issue.
+# EvoLogics is left out for now: the ideal needs the driver's burst airtime
+# model (the first figure came out above 1): open work of the transport issue.
 MODEMS = ("seatrac",)
 DISTANCE = 150.0
 
