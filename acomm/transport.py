@@ -23,6 +23,7 @@
 
 from . import segment as sg
 from .arq import Outgoing, Reassembly
+from .compress import compress, decompress
 from .compat import const, ticks_add, ticks_diff
 from .errors import AcommError, DecodeError
 from .events import AVAILABLE, DELIVERED, EV_PACKET, EV_PACKET_STATUS, EXPIRED, FAILED, QUEUED, TRANSMITTED, UNAVAILABLE
@@ -77,7 +78,8 @@ class Transport:
         self._out = []  # _Packet, pending
         self._lanes = {}  # (link name, hop id) -> [packet or None, packet or None]
         self._gens = {}  # (link name, hop id, lane) -> generation of its last transfer
-        self._reqs = {}  # link request id -> (packet or None, index)
+        self._reqs = {}  # link request id -> (packet, fragment index, poll flag)
+        self._sacks = {}  # link request id -> (link, neighbour id, SACK bytes, tries)
         self._rx = {}  # (link name, src id, lane) -> Reassembly
         self._done = []  # (origin, pid) delivered here lately
         self._pid = 0
@@ -111,14 +113,9 @@ class Transport:
         p.inflight = 0
         p.relayed = origin != self.node.node_id
         if not compressed and self.compress and len(body) > 16:
-            try:
-                from .compress import compress
-
-                z = compress(body)
-                if len(z) < len(body):
-                    p.body, p.compressed = z, True
-            except ImportError:
-                pass
+            z = compress(body)
+            if len(z) < len(body):
+                p.body, p.compressed = z, True
         return p
 
     def _keep(self, p):
@@ -274,6 +271,15 @@ class Transport:
 
     def on_link_status(self, now, rid, status, reason):
         # -> True when the request was the transport's
+        sk = self._sacks.get(rid)
+        if sk is not None:
+            if status >= TRANSMITTED:
+                del self._sacks[rid]
+                # a modem that refused it (busy acknowledging the fragment
+                # it just received) gets it again, twice at most
+                if status == FAILED and sk[3] < 2:
+                    self._sack(now, sk[0], sk[1], sk[2], sk[3] + 1)
+            return True
         r = self._reqs.get(rid)
         if r is None:
             return False
@@ -281,12 +287,6 @@ class Transport:
             return True
         del self._reqs[rid]
         p, index, poll = r
-        if p is None:
-            # a SACK of ours; a modem that refused it (busy acknowledging
-            # the fragment it just received) gets it again, twice at most
-            if status == FAILED and index[3] < 2:
-                self._sack(now, index[0], index[1], index[2], index[3] + 1)
-            return True
         p.inflight -= 1
         if p.out is not None and poll:
             if status == TRANSMITTED:
@@ -362,10 +362,8 @@ class Transport:
                 origin, final, prio, life = src, self.node.node_id, 8, 3600
             data = body
             if h.compressed:
-                from .compress import decompress
-
                 data = decompress(body, self.max_packet)
-        except (DecodeError, ImportError):
+        except DecodeError:
             self.stats["rx_bad"] += 1
             r.frags.clear()
             r.size = 0
@@ -392,4 +390,4 @@ class Transport:
     def _sack(self, now, link, src, data, tries=0):
         rid = self.node.next_req_id()
         if link.request(now, rid, self.node.names.name_of(src), data, 60, _SACK_PRIORITY, False, None, SEGMENT):
-            self._reqs[rid] = (None, (link, src, data, tries), 0)
+            self._sacks[rid] = (link, src, data, tries)

@@ -64,9 +64,10 @@ class DiveLog:
 
     def queue(self, now):
         self.queued_at = now
-        for p in self.payloads():
+        payloads = self.payloads()
+        for p in payloads:
             self.entries.append(self.traffic.send(self.sn, self.dst, p, "log", self.lifespan_s, self.priority, True, now))
-        return sum(len(p) for p in self.payloads())
+        return sum(len(p) for p in payloads)
 
     def progress(self):
         # (lines received, lines, bytes received, bytes)

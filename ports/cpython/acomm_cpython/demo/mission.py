@@ -20,6 +20,7 @@
 from acomm.catalog import caddy, teleop
 from acomm.events import AVAIL_NAMES, EV_AVAILABILITY, EV_RECEIVED, EV_STATUS, FAILED, EXPIRED
 from acomm.mac import Tdma
+from acomm_sim.caddy import CaddyCycle
 from acomm_sim.channel import Channel
 from acomm_sim.world import World
 
@@ -88,7 +89,7 @@ class Mission:
         self.discovered = {}  # (who, whom) -> ms
         self.caddy = None
         self.caddy_phase = caddy_phase
-        self.caddy_note = None
+        self.spans = []  # (start ms, end ms, name) of the plan's phases, for the plots
         self.vehicle = Vehicle(self.channel, ADDR[AUV], START[AUV], timeout_ms=35000, say=self.say)
         self.pilot = Pilot(self.traffic, self.nodes[BUOY], AUV, 30000, 10000, CLASSES["teleop"][1],
                            CLASSES["teleop"][0], self.say)
@@ -171,15 +172,10 @@ class Mission:
     def _caddy_start(self, now):
         if not self.caddy_phase:
             return
-        try:
-            from acomm_sim.caddy import CaddyCycle
-        except ImportError:
-            self.caddy_note = "the CADDY cycle is not in this build"
-            self.say(now, "caddy", "skipped: " + self.caddy_note)
-            return
         self._macs(None, None)
         self.caddy = CaddyCycle(self.world, pladypos=BUOY, buddy=AUV, diver=DIVER)
         self.caddy.start(now)
+        self._caddy_from = now
         self.say(now, "caddy", "TDMA off: the CADDY interrogation cycle orders the channel "
                  "(buoy = PlaDyPos, auv = Buddy, diver)")
 
@@ -187,6 +183,7 @@ class Mission:
         if self.caddy is None:
             return
         self.caddy.stop()
+        self.spans.append((self._caddy_from, now, "caddy"))
         t = sorted(self.caddy.cycle_times_ms)
         med = t[len(t) // 2] / 1000 if t else None
         self.say(now, "caddy", "%d cycles, median %s s per cycle (seed 003 budget 7.24 s, 7.64 s with sonar)"
@@ -218,15 +215,18 @@ class Mission:
         self.say(now, "mac", "teleop TDMA: %s (cycle %.1f s)" % (
             " / ".join("%s %.0f s" % (s[0], s[1] / 1000) for s in TELEOP_SLOTS), sum(s[1] for s in TELEOP_SLOTS) / 1000))
         self.pilot.start(now)
+        self._teleop_from = now
         self.say(now, "teleop", "buoy pilot takes the auv: event-triggered thrust, heartbeat every 10 s, "
                  "auv failsafe after 35 s of silence")
 
     def _shadow(self, now):
         self.channel.noise_burst(now, 75000, receiver=ADDR[AUV])
+        self.spans.append((now, now + 75000, "shadow"))
         self.say(now, "shadow", "auv enters an acoustic shadow for 75 s: it hears nothing")
 
     def _teleop_stop(self, now):
         self.pilot.stop(now)
+        self.spans.append((self._teleop_from, now, "teleop"))
         self.say(now, "teleop", "pilot releases the auv (neutral); %d commands, %d heartbeats sent, "
                  "auv travelled %.0f m" % (self.pilot.commands, self.pilot.heartbeats, self.vehicle.travelled))
         self.plan.at(now / 1000 + 30, self._teleop_over)
@@ -241,6 +241,7 @@ class Mission:
     def _ship(self, now):
         self.outage = (now, now + 120000)
         self.channel.noise_burst(now, 120000)
+        self.spans.append((now, now + 120000, "outage"))
         self.say(now, "outage", "a ship passes overhead: nobody hears anything for 2 minutes")
         self.plan.at(now / 1000 + 120, lambda t: self.say(t, "outage", "the water is quiet again"))
 

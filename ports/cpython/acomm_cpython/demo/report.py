@@ -49,7 +49,7 @@ def summary(m, wall_s):
 def _caddy(m):
     c = m.caddy
     if c is None:
-        return {"note": m.caddy_note or "not run"}
+        return {"note": "not run"}
     t = sorted(c.cycle_times_ms)
     return {
         "cycles": c.cycles,
@@ -166,7 +166,7 @@ def plots(m, outdir):
         lost = [r for r in rows if r[1] == c and r[7] is None]
         ax.scatter([r[6] / 60000 for r in ok], [i] * len(ok), s=8, c="tab:blue")
         ax.scatter([r[6] / 60000 for r in lost], [i] * len(lost), s=14, c="tab:red", marker="x")
-    for start, end, label in _spans(m):
+    for start, end, label in m.spans:
         ax.axvspan(start / 60000, end / 60000, alpha=0.12, color="gray")
         ax.text(start / 60000 + 0.05, len(classes) - 0.55, label, fontsize=7)
     ax.set_ylim(-0.6, len(classes) - 0.3)  # room for the phase names on top
@@ -177,17 +177,6 @@ def plots(m, outdir):
     paths.append(_save(fig, outdir, "timeline.png"))
     plt.close("all")
     return paths
-
-
-def _spans(m):
-    out = []
-    if m.caddy is not None:
-        out.append((60000, 240000, "caddy"))
-    out.append((600000, 900000, "teleop"))
-    out.append((720000, 795000, "shadow"))
-    if m.outage is not None:
-        out.append((m.outage[0], m.outage[1], "outage"))
-    return out
 
 
 def _save(fig, outdir, name):

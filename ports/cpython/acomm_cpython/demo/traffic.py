@@ -59,6 +59,3 @@ class Traffic:
         self.log.received(best[0], now)
         return best
 
-    def pending(self, cls):
-        # entries of a class queued and neither received nor finally failed
-        return [e for e in self._by_req.values() if e[2] == cls and e[4] is None and e[3] not in ("expired", "failed")]

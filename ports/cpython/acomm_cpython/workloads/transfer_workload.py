@@ -40,16 +40,9 @@ def _world(modem, loss, seed):
 
 
 def ideal_bps(driver, loss):
+    # the driver's own airtime model (SeaTrac: 500 ms + 80 ms a byte)
     mtu = driver.caps.mtu_tx
-    air = _airtime_ms(driver, mtu)
-    return mtu * 8 * 1000 / air * (1 - loss)
-
-
-def _airtime_ms(driver, n):
-    if hasattr(driver, "airtime_ms"):
-        return driver.airtime_ms(n)
-    # EvoLogics: burst data at the burst bit rate after the packet preamble
-    return driver.packet_ms + n * 8000 / (driver.burst_bitrate if n > 64 else driver.im_bitrate)
+    return mtu * 8 * 1000 / driver.airtime_ms(mtu) * (1 - loss)
 
 
 def run_acomm(modem, loss, seed=1):
