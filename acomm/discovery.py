@@ -113,6 +113,11 @@ class Discovery:
         e = self._nodes.get(node_id)
         return UNKNOWN if e is None else e[2]
 
+    def last_heard(self, node_id):
+        # ticks when a frame from node_id was last heard, or None
+        e = self._nodes.get(node_id)
+        return None if e is None else e[0]
+
     def available(self):
         return [k for k in self._nodes if self._nodes[k][2] == AVAILABLE]
 

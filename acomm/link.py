@@ -100,8 +100,12 @@ class Link(Ranging):
         dup_window_ms=60000,
         ack_window=4,
         overhear=False,
+        medium=None,
     ):
         self.name = name
+        # the kind of link ("acoustic", "satellite", "gsm", "ip", "radio"):
+        # the transport's medium choice matches it as well as the name
+        self.medium = medium or name
         self.driver = driver
         self.node_id = node_id
         self.names = names
@@ -187,6 +191,10 @@ class Link(Ranging):
 
     def mtu_for(self, dst_id):
         return self.framing.mtu_for(dst_id)
+
+    def addressable(self, nid):
+        # whether this link can put a frame to node nid on the air
+        return nid != self.node_id and (not self.elided or self.addr_map.addr_of(nid) is not None)
 
     def _resolve(self, dst):
         # destination name -> node id (None for broadcast); raises on unknown

@@ -3,9 +3,8 @@
 
 import os
 from collections import OrderedDict
-from binascii import hexlify
 
-from checks import raises
+from checks import TempDir, raises
 
 from acomm.crc32 import crc32, crc32_pure
 from acomm.errors import AcommError, EncodeError, StoreError, StoreFull
@@ -15,19 +14,7 @@ from acomm.store import MAGIC, Store
 HDR = len(MAGIC)
 
 
-class _Dir:
-    def __enter__(self):
-        self.path = "/tmp/acomm-store-" + hexlify(os.urandom(6)).decode()
-        os.mkdir(self.path)
-        return self
-
-    def __exit__(self, *exc):
-        for n in os.listdir(self.path):
-            os.remove(self.path + "/" + n)
-        os.rmdir(self.path)
-
-    def file(self, name="s"):
-        return self.path + "/" + name
+_Dir = TempDir
 
 
 def _read(path):

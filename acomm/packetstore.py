@@ -1,0 +1,196 @@
+# The transport's packets in a store (acomm.store.Store on a file, or the
+# MemoryStore here), and the store's overflow rule.
+#
+# A packet is one or more records. Chunk 0 holds the header and the start
+# of the body; chunks 1..n-1 the rest, each at most the store's max_record.
+# Key of chunk i: i << 24 | origin << 16 | pid. put() writes chunks 1..n-1
+# first and chunk 0 last, delete() removes chunk 0 first: a packet exists
+# exactly when its chunk 0 does, and recovery deletes chunks left without
+# one (a cut in the middle of a put or a delete).
+#
+# Chunk 0 header, 11 bytes: origin, final destination, pid (2, big-endian),
+# priority, flags (bit 0: body compressed; bit 1: a medium name follows),
+# expiry (4, wall-clock seconds, big-endian), chunk count; then the medium
+# (a length byte and the name) when flagged; then body bytes.
+#
+# One more record, key 0xFFFFFF (origin 255 is the broadcast address, never
+# a sender), holds the packet id limit: ids below it may have been used.
+# It is written once per _PID_BLOCK packets, so a restarted sender never
+# reuses an id a receiver may still remember (duplicate suppression keys on
+# origin and id), without a write per packet.
+#
+# Overflow rule: a store with a capacity keeps its last quarter for urgent
+# packets (priority <= urgent). A packet that does not fit is refused when
+# it is offered (send() reports `failed`; a relay answers "receiver full"
+# and the sender keeps the packet and tries again later). A packet once
+# accepted is never dropped to make room: it leaves when delivered or
+# expired.
+
+from .compat import const
+from .errors import StoreFull
+
+_HDR = const(11)
+_META = const(0xFFFFFF)
+_PID_BLOCK = const(32)
+_REC_OVERHEAD = const(12)  # acomm.store's record header and CRC
+_F_COMPRESSED = const(1)
+_F_MEDIUM = const(2)
+
+
+class MemoryStore:
+    # The store's interface in RAM (tests, nodes without storage); a
+    # capacity makes it apply the same limit as a file store.
+    def __init__(self, capacity_bytes=None, max_record=65535):
+        self._d = {}
+        self.capacity_bytes = capacity_bytes
+        self.max_record = max_record
+        self.live_bytes = 0
+
+    def put(self, key, data):
+        old = self._d.get(key)
+        grow = len(data) + _REC_OVERHEAD - (0 if old is None else len(old) + _REC_OVERHEAD)
+        if self.capacity_bytes is not None and self.live_bytes + grow > self.capacity_bytes:
+            raise StoreFull("store full")
+        self._d[key] = bytes(data)
+        self.live_bytes += grow
+
+    def delete(self, key):
+        old = self._d.pop(key, None)
+        if old is not None:
+            self.live_bytes -= len(old) + _REC_OVERHEAD
+
+    def get(self, key):
+        return self._d.get(key)
+
+    def keys(self):
+        return list(self._d)
+
+
+class Stored:
+    # what recover() gives back for each packet
+    __slots__ = ("origin", "final", "pid", "prio", "expiry", "compressed", "medium", "body", "chunks")
+
+
+class PacketStore:
+    def __init__(self, store, urgent=4):
+        self.store = store
+        self.urgent = urgent
+        self.chunk = min(getattr(store, "max_record", 65535), 65535)
+        self.pid = 0
+        self._limit = 0  # ids up to here are covered by the stored limit
+
+    def _sizes(self, p):
+        n = _HDR + (1 + len(p.medium) if p.medium else 0) + len(p.body)
+        return n, (n + self.chunk - 1) // self.chunk
+
+    def room(self, p):
+        # whether the overflow rule lets packet p in
+        cap = getattr(self.store, "capacity_bytes", None)
+        if cap is None:
+            return True
+        n, chunks = self._sizes(p)
+        limit = cap if p.prio <= self.urgent else cap - cap // 4
+        return self.store.live_bytes + n + chunks * _REC_OVERHEAD <= limit
+
+    def next_pid(self):
+        pid = (self.pid + 1) & 0xFFFF
+        if ((pid - self._limit) & 0xFFFF) < 0x8000:
+            # past the stored limit: move it a block ahead first
+            limit = (pid + _PID_BLOCK) & 0xFFFF
+            self.store.put(_META, bytes((limit >> 8, limit & 0xFF)))
+            self._limit = limit
+        self.pid = pid
+        return pid
+
+    def put(self, p):
+        # raises StoreFull (nothing of the packet stays then)
+        n, chunks = self._sizes(p)
+        if chunks > 255:
+            raise StoreFull("packet of %d bytes needs more than 255 records" % len(p.body))
+        p.chunks = chunks
+        flags = (_F_COMPRESSED if p.compressed else 0) | (_F_MEDIUM if p.medium else 0)
+        e = p.expiry & 0xFFFFFFFF
+        head = bytes((p.origin, p.final, p.pid >> 8, p.pid & 0xFF, p.prio, flags, e >> 24, (e >> 16) & 0xFF,
+                      (e >> 8) & 0xFF, e & 0xFF, chunks))
+        if p.medium:
+            m = p.medium.encode()
+            head += bytes((len(m),)) + m
+        first = self.chunk - len(head)
+        body = p.body
+        try:
+            for i in range(1, chunks):
+                a = first + (i - 1) * self.chunk
+                self.store.put((i << 24) | p.key, body[a : a + self.chunk])
+            self.store.put(p.key, head + body[:first])
+        except StoreFull:
+            for i in range(1, chunks):
+                self.store.delete((i << 24) | p.key)
+            raise
+
+    def delete(self, p):
+        # p.chunks: what put() or recover() found (a copy of an "all"
+        # packet has another medium than the record)
+        self.store.delete(p.key)
+        for i in range(1, p.chunks):
+            self.store.delete((i << 24) | p.key)
+
+    def recover(self):
+        # -> [Stored]; drops what a cut left incomplete
+        st = self.store
+        keys = st.keys()
+        heads = {}
+        for k in keys:
+            if k == _META:
+                m = st.get(k)
+                if m is not None and len(m) == 2:
+                    self._limit = self.pid = (m[0] << 8) | m[1]
+            elif k >> 24 == 0:
+                heads[k] = True
+        out = []
+        for k in keys:
+            if k == _META or k >> 24:
+                if k != _META and (k & 0xFFFFFF) not in heads:
+                    st.delete(k)  # a chunk whose packet is gone or never finished
+                continue
+            s = self._load(k)
+            if s is None:
+                self._drop(k)
+            else:
+                out.append(s)
+        return out
+
+    def _load(self, k):
+        rec = self.store.get(k)
+        if rec is None or len(rec) < _HDR:
+            return None
+        s = Stored()
+        s.origin, s.final, s.pid, s.prio = rec[0], rec[1], (rec[2] << 8) | rec[3], rec[4]
+        s.compressed = bool(rec[5] & _F_COMPRESSED)
+        s.expiry = int.from_bytes(rec[6:10], "big")
+        s.chunks = chunks = rec[10]
+        at = _HDR
+        s.medium = None
+        if rec[5] & _F_MEDIUM:
+            if at >= len(rec) or at + 1 + rec[at] > len(rec):
+                return None
+            try:
+                s.medium = rec[at + 1 : at + 1 + rec[at]].decode()
+            except ValueError:  # UnicodeError on CPython
+                return None
+            at += 1 + rec[at]
+        parts = [rec[at:]]
+        for i in range(1, chunks):
+            c = self.store.get((i << 24) | k)
+            if c is None:
+                return None
+            parts.append(c)
+        s.body = b"".join(parts)
+        return s
+
+    def _drop(self, k):
+        self.store.delete(k)
+        for i in range(1, 256):
+            kk = (i << 24) | k
+            if self.store.get(kk) is None:
+                break
+            self.store.delete(kk)

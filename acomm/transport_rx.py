@@ -1,0 +1,153 @@
+# The receiving half of the transport (acomm.transport): fragments in,
+# reassembly per (link, neighbour, lane), selective acknowledgements out,
+# whole packets up (or into the store, at a relay).
+#
+# Bounds: at most _MAX_RX reassemblies at a time (a sender beyond that is
+# refused "receiver full" and tries again later), each of at most
+# max_packet bytes, dropped after _RX_TIMEOUT_MS without a fragment; the
+# last _DONE_MEMORY delivered (origin, packet id) pairs, so a packet sent
+# again (its SACK was lost, or the sender restarted before it came) is
+# acknowledged and not delivered twice.
+
+from . import segment as sg
+from .arq import Reassembly
+from .compat import const, ticks_diff
+from .compress import decompress
+from .errors import DecodeError
+from .events import EV_PACKET, FAILED, TRANSMITTED
+from .frame import SEGMENT
+
+_SACK_PRIORITY = const(2)
+_RX_TIMEOUT_MS = const(600000)
+_MAX_RX = const(8)
+_DONE_MEMORY = const(32)
+
+
+class _Room:
+    # what the store's overflow rule needs to judge a packet not yet whole
+    __slots__ = ("body", "prio", "medium")
+
+
+class Receiving:
+    def __init__(self):
+        self._rx = {}  # (link name, src id, lane) -> Reassembly
+        self._done = []  # (origin, pid) delivered here lately
+        self._sacks = {}  # link request id -> (link, neighbour id, SACK bytes, tries)
+
+    def _rx_poll(self, now):
+        for k in [k for k in self._rx if ticks_diff(now, self._rx[k].touched) > _RX_TIMEOUT_MS]:
+            del self._rx[k]
+
+    def on_segment(self, now, link, src, dst, payload):
+        try:
+            s = sg.decode(payload)
+        except DecodeError:
+            self.stats["rx_bad"] += 1
+            return
+        if s.is_sack:
+            self.stats["sacks"] += 1
+            self._on_sack(now, link, src, s)
+            return
+        key = (link.name, src, s.lane)
+        r = self._rx.get(key)
+        if r is None or r.gen != s.gen:
+            if len(self._rx) >= _MAX_RX:
+                self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
+                return
+            r = self._rx[key] = Reassembly(s.gen, self.max_packet + 16, now)
+        try:
+            first = r.header is None
+            r.add(s.index, s.payload, now)
+        except DecodeError:
+            self.stats["rx_bad"] += 1
+            del self._rx[key]
+            self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_TOO_BIG))
+            return
+        if first and r.header is not None and not self._can_take(r.header):
+            # a relay without room says so before the rest is sent
+            del self._rx[key]
+            self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
+            return
+        if r.done_pid is None and r.complete():
+            if not self._arrived(now, link, src, r):
+                del self._rx[key]
+                self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
+                return
+        if s.poll or (r.done_pid is not None and s.index == r.count - 1):
+            if r.done_pid is not None:
+                self._sack(now, link, src, sg.sack_complete(s.lane, s.gen, r.count, r.done_pid))
+            else:
+                b, bm = r.bitmap()
+                self._sack(now, link, src, sg.sack(s.lane, s.gen, b, bm))
+
+    def _can_take(self, h):
+        if h.relay is None or h.relay[1] == self.node.node_id:
+            return True  # for this node: delivered, never stored
+        q = _Room()
+        q.body, q.prio, q.medium = b"\0" * h.length, h.relay[2], None
+        if self.packets.room(q):
+            return True
+        self.stats["store_full"] += 1
+        return False
+
+    def _arrived(self, now, link, src, r):
+        # -> False when a packet to relay found no room in the store
+        try:
+            blob = r.blob()
+            h = r.header
+            body = blob[h.size :]
+            if h.relay is not None:
+                origin, final, prio, life = h.relay
+            else:
+                origin, final, prio, life = src, self.node.node_id, 8, 3600
+            data = body
+            if h.compressed:
+                data = decompress(body, self.max_packet)
+        except DecodeError:
+            self.stats["rx_bad"] += 1
+            r.frags.clear()
+            r.size = 0
+            r.count = None
+            r.header = None
+            return True
+        if final != self.node.node_id:
+            if (origin, h.pid) not in self._done:
+                p = self._packet(origin, final, h.pid, prio, self.wall() + life, body, h.compressed, None)
+                if not self._keep(p):
+                    return False
+                self.stats["relayed"] += 1
+                self._remember(origin, h.pid)
+        elif (origin, h.pid) in self._done:
+            self.stats["rx_dup"] += 1
+        else:
+            self._remember(origin, h.pid)
+            self.stats["received"] += 1
+            names = self.node.names
+            self._emit((EV_PACKET, names.name_of(origin), names.name_of(final), data))
+        r.done_pid = h.pid
+        r.frags = {}  # the memory goes; the lane remembers only the completion
+        return True
+
+    def _remember(self, origin, pid):
+        self._done.append((origin, pid))
+        if len(self._done) > _DONE_MEMORY:
+            self._done.pop(0)
+
+    def _sack(self, now, link, src, data, tries=0):
+        rid = self.node.next_req_id()
+        if link.request(now, rid, self.node.names.name_of(src), data, 60, _SACK_PRIORITY, False, None, SEGMENT):
+            self._sacks[rid] = (link, src, data, tries)
+
+    def _sack_status(self, now, rid, status):
+        # -> True when rid was one of our SACKs
+        sk = self._sacks.get(rid)
+        if sk is None:
+            return False
+        if status >= TRANSMITTED:
+            del self._sacks[rid]
+            # a modem that refused it (busy acknowledging the fragment it
+            # just received) gets it again, twice at most
+            if status == FAILED and sk[3] < 2:
+                self._sack(now, sk[0], sk[1], sk[2], sk[3] + 1)
+        return True
+

@@ -1,0 +1,133 @@
+# The transport's persistence: packets on a real file store (acomm.store)
+# across restarts, lifespans that keep counting through a restart, packet
+# ids never reused, duplicates suppressed when a restarted sender sends a
+# delivered packet again, big packets in several records, and the store's
+# overflow rule (acomm.packetstore) at the sender and at a relay.
+from acomm.errors import StoreFull
+from acomm.events import DELIVERED, EXPIRED, FAILED, QUEUED, TRANSMITTED
+from acomm.packetstore import MemoryStore, PacketStore
+from acomm.prng import Prng
+from acomm.store import Store
+from acomm.transport import Transport
+from checks import TempDir, raises
+from transportnet import net, packets, statuses, wall_of
+
+
+def _restart(sn, w, store, **kw):
+    # the node comes back: a new transport on the same store
+    sn.node.transport = None
+    return Transport(sn.node, store=store, wall=wall_of(w), **kw)
+
+
+def test_a_restart_on_a_file_store_resumes_the_transfer():
+    with TempDir() as d:
+        st = Store(d.file("diver"), capacity_bytes=32768, max_record=256)
+        w, a, b, _, ta = net(loss=0.05, stores={"diver": st})
+        data = Prng(11).bytes(700)  # random: 3 records, 27 fragments
+        pid = ta.send(w.now(), "buoy", data, 3600, 5)
+        w.run(600000, until=lambda: ta.stats["fragments"] >= 8)
+        assert not packets(b)
+        st.close()  # power cut; the file is all that is left
+        st = Store(d.file("diver"), capacity_bytes=32768, max_record=256)
+        t2 = _restart(a, w, st)
+        assert t2.pending() == [pid]
+        assert w.run(1200000, until=lambda: DELIVERED in statuses(a, pid))
+        assert [e[1:] for e in packets(b)] == [("diver", "buoy", data)]
+        w.run(5000)
+        assert t2.pending() == [] and len(st) == 1  # only the packet id limit
+        assert t2.send(w.now(), "buoy", b"after", 60, 5) != pid  # ids go on
+        st.close()
+
+
+def test_a_lifespan_keeps_counting_through_a_restart():
+    w, a, b, _, ta = net()
+    w.channel.loss = 1.0  # nothing gets through
+    store = ta.store
+    t0 = w.now()
+    pid = ta.send(t0, "buoy", b"never", 30, 5)
+    w.run(20000)
+    t2 = _restart(a, w, store)
+    assert t2.pending() == [pid]
+    assert w.run(60000, until=lambda: EXPIRED in statuses(a, pid))
+    assert 29000 <= w.now() - t0 <= 32000  # 30 s from send(), not from the restart
+
+
+def test_a_sender_restarted_before_the_ack_does_not_deliver_twice():
+    store = MemoryStore()
+    w, a, b, _, ta = net(stores={"diver": store})
+    pid = ta.send(w.now(), "buoy", b"status: ok, depth 12 m", 3600, 5)
+    before = dict(store._d)  # the store as a cut just before the SACK left it
+    assert w.run(600000, until=lambda: DELIVERED in statuses(a, pid))
+    store._d = before
+    t2 = _restart(a, w, store)
+    assert t2.pending() == [pid]
+    assert w.run(600000, until=lambda: statuses(a, pid).count(DELIVERED) == 2)
+    assert len(packets(b)) == 1  # the receiver's lane remembered the completion
+
+
+def test_a_restarted_sender_is_not_confused_by_the_receivers_lane_memory():
+    # the receiver's lane 0 remembers the last packet's completion under
+    # generation 0; the restarted sender starts its lane at generation 0
+    # again with another packet, and must not take that completion for its own
+    w, a, b, _, ta = net()
+    p1 = ta.send(w.now(), "buoy", b"first", 3600, 5)
+    assert w.run(600000, until=lambda: DELIVERED in statuses(a, p1))
+    t2 = _restart(a, w, ta.store)
+    p2 = t2.send(w.now(), "buoy", b"second", 3600, 5)
+    assert w.run(600000, until=lambda: DELIVERED in statuses(a, p2))
+    assert [e[3] for e in packets(b)] == [b"first", b"second"]
+
+
+def test_packet_ids_survive_a_restart_without_a_write_per_packet():
+    st = MemoryStore()
+    ps = PacketStore(st)
+    ids = [ps.next_pid() for _ in range(40)]
+    assert ids == list(range(1, 41))
+    ps2 = PacketStore(st)
+    ps2.recover()
+    assert ps2.next_pid() > 40  # never an id that may have been used
+    writes = []
+    st.put = lambda k, v: writes.append(k)
+    for _ in range(64):
+        ps2.next_pid()
+    assert len(writes) == 2  # one limit record per 32 ids
+
+
+def test_a_cut_put_leaves_no_half_packet():
+    st = MemoryStore(max_record=64)
+    w, a, b, _, ta = net(stores={"diver": st})
+    ta.send(w.now(), "buoy", Prng(2).bytes(300), 3600, 5)  # 5 records
+    keys = st.keys()
+    assert len(keys) == 6  # 5 chunks and the packet id limit
+    del st._d[ta._out[0].key]  # chunk 0 is written last: cut before it
+    t2 = _restart(a, w, st)
+    assert t2.pending() == [] and st.keys() == [0xFFFFFF]
+
+
+def test_the_overflow_rule_refuses_new_low_priority_packets_only():
+    st = MemoryStore(capacity_bytes=2000)
+    w, a, b, _, ta = net(stores={"diver": st})
+    w.channel.loss = 1.0
+    got = [ta.send(w.now(), "buoy", Prng(k).bytes(500), 3600, 10) for k in range(3)]
+    assert [statuses(a, p) for p in got] == [[QUEUED], [QUEUED], [FAILED]]  # past 3/4 of 2000
+    urgent = ta.send(w.now(), "buoy", Prng(9).bytes(500), 3600, 2)
+    assert statuses(a, urgent) == [QUEUED]  # the last quarter is for urgent packets
+    more = ta.send(w.now(), "buoy", Prng(8).bytes(500), 3600, 1)
+    assert statuses(a, more) == [FAILED] and ta.stats["store_full"] == 2
+    w.run(60000)
+    assert sorted(ta.pending()) == sorted(got[:2] + [urgent])  # nothing accepted was dropped
+    raises(StoreFull, st.put, 1, bytes(2000))
+
+
+def test_a_full_relay_refuses_and_the_sender_keeps_the_packet():
+    relay_store = MemoryStore(capacity_bytes=300)
+    w, a, b, c, ta = net(relay=True, stores={"auv": relay_store})
+    data = Prng(4).bytes(400)
+    pid = ta.send(w.now(), "buoy", data, 7200, 5)
+    assert w.run(600000, until=lambda: ta.stats["refused"] >= 1)
+    assert statuses(a, pid) == [QUEUED] and not packets(b)
+    assert c.node.transport.stats["store_full"] >= 1
+    relay_store.capacity_bytes = 4000  # packets left the relay: room again
+    assert w.run(1200000, until=lambda: packets(b))
+    assert packets(b)[0][1:] == ("diver", "buoy", data)
+    assert statuses(a, pid) == [QUEUED, TRANSMITTED]
