@@ -101,6 +101,7 @@ class Link(Ranging):
         ack_window=4,
         overhear=False,
         medium=None,
+        fec=0,
     ):
         self.name = name
         # the kind of link ("acoustic", "satellite", "gsm", "ip", "radio"):
@@ -117,7 +118,7 @@ class Link(Ranging):
         # who confirms delivery: the modem (its own acks, on elided links
         # of reliable modems) or this link (acomm ACK frames)
         self.modem_acks = self.elided and driver.caps.has(CAP_RELIABLE)
-        self.framing = LinkFraming(node_id, self.elided, self.addr_map, driver.caps.mtu_tx, not self.modem_acks)
+        self.framing = LinkFraming(node_id, self.elided, self.addr_map, driver.caps.mtu_tx, not self.modem_acks, fec)
         self.seq_mod = self.framing.seq_mod
         self.max_retries = max_retries
         self.dup_window_ms = dup_window_ms

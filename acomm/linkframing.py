@@ -7,13 +7,22 @@
 #         from modem addresses through the link's AddressMap.
 #
 # The link above deals only in node ids (None meaning broadcast).
+#
+# fec > 0 appends that many Reed-Solomon parity bytes (acomm.fec) to every
+# frame, so a receiver repairs up to fec // 2 damaged bytes instead of
+# losing the frame. It helps where damaged frames reach the host: serial
+# radios and the software-defined packet modems of seed 004 (raw frames,
+# whose CRC then checks the repair). Modems that check frames themselves
+# drop damaged ones before acomm sees them. A codeword is at most 255
+# bytes, so the frame's MTU shrinks to 255 - fec when it was larger. Both
+# ends of a link must use the same fec.
 
 from . import frame as fr
 from .errors import DecodeError
 
 
 class LinkFraming:
-    def __init__(self, node_id, elided, addr_map, mtu, link_acks=False):
+    def __init__(self, node_id, elided, addr_map, mtu, link_acks=False, fec=0):
         self.node_id = node_id
         self.elided = elided
         self.link_acks = link_acks
@@ -23,6 +32,15 @@ class LinkFraming:
             self.worst_overhead = fr.ELIDED_OVERHEAD + (1 if link_acks else 0)
         else:
             self.worst_overhead = fr.RAW_OVERHEAD_WIDE
+        self._rs = None
+        self.corrected = 0  # bytes repaired by the FEC
+        if fec:
+            from .fec import ReedSolomon
+
+            self._rs = ReedSolomon(fec)
+            self.worst_overhead += fec
+            mtu = min(mtu, 255)
+        self.fec = fec
         self._mtu = mtu
         self._buf = bytearray(mtu + fr.RAW_OVERHEAD_WIDE)
 
@@ -30,7 +48,7 @@ class LinkFraming:
         # payload bytes one frame to dst_id can carry
         if self.elided:
             return self._mtu - self.worst_overhead
-        return self._mtu - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
+        return self._mtu - self.fec - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
 
     def encode(self, ftype, dst_id, seq, payload, flags=0):
         # -> (interface address or None, frame bytes). On an elided link
@@ -44,11 +62,18 @@ class LinkFraming:
             d = fr.BROADCAST if dst_id is None else dst_id
             n = fr.encode_raw_into(buf, ftype, self.node_id, d, seq, payload, flags)
             addr = None
+        if self._rs is not None:
+            return addr, self._rs.encode(memoryview(buf)[:n])
         return addr, bytes(memoryview(buf)[:n])
 
     def decode(self, src_addr, dst_addr, data):
         # -> (Frame, source node id, destination node id or None for
         # broadcast). Raises DecodeError.
+        if self._rs is not None:
+            if len(data) <= self.fec:
+                raise DecodeError("frame shorter than its FEC parity")
+            data, n = self._rs.decode_count(data)
+            self.corrected += n
         if not self.elided:
             f = fr.decode_raw(data)
             return f, f.src, (None if f.dst == fr.BROADCAST else f.dst)

@@ -10,7 +10,9 @@
 #   (metres, probability) points, beyond its last point certain loss unless
 #   the curve says otherwise, plus a fixed probability (Medium's `loss`);
 # - noise bursts: intervals in which nothing is heard (everywhere, or at one
-#   receiver).
+#   receiver);
+# - byte errors: damaged bytes in the packets that do arrive, for modems
+#   that hand up what they demodulated (the link's FEC repairs them).
 #
 # Half-duplex comes from Medium: a station that transmits during any part
 # of a reception does not hear it. Counters say why each copy was lost.
@@ -76,7 +78,7 @@ def _dist(a, b):
 
 class Channel(Medium):
     def __init__(self, default_distance=100.0, loss=0.0, seed=1, sound_speed=1500.0, loss_curve=None,
-                 collisions=True, now=0):
+                 collisions=True, now=0, byte_errors=0.0):
         Medium.__init__(self, default_distance, loss, seed, sound_speed)
         self.loss_curve = loss_curve  # ((metres, p), ...) or None
         self.collisions = collisions
@@ -88,6 +90,12 @@ class Channel(Medium):
         self.range_lost = 0  # copies lost to the loss curve
         self.noise_lost = 0  # copies lost in a noise burst
         self.sent = 0  # packets put on the channel
+        # chance that a byte of a delivered packet arrives damaged (one bit
+        # flipped): a modem that hands up what it demodulated, errors and
+        # all, as the seed 004 software modems do; modem models whose packets
+        # are not bytes keep theirs whole
+        self.byte_errors = byte_errors
+        self.damaged = 0  # bytes damaged
 
     # -- geometry ----------------------------------------------------------------
     def set_position(self, addr, east, north, depth):
@@ -147,6 +155,19 @@ class Channel(Medium):
         Medium.poll(self, now)
         if self._bursts:  # forget bursts long past
             self._bursts = [b for b in self._bursts if ticks_diff(now, b[1]) < 600000]
+
+    def _damaged(self, packet):
+        p = self.byte_errors
+        if not p or not isinstance(packet, (bytes, bytearray)):
+            return packet
+        out = None
+        for i in range(len(packet)):
+            if self.rng.chance(p):
+                if out is None:
+                    out = bytearray(packet)
+                out[i] ^= 1 << self.rng.below(8)
+                self.damaged += 1
+        return packet if out is None else bytes(out)
 
     def _lost_on_arrival(self, item):
         end, seq, dst, _, _, start, _ = item

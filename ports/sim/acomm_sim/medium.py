@@ -141,12 +141,16 @@ class Medium:
                 self.deaf += 1
                 continue
             self.delivered += 1
-            st.receive(end, src, packet, d)
+            st.receive(end, src, self._damaged(packet), d)
 
     def _lost_on_arrival(self, item):
         # what the acoustic channel decides at the receiver (collisions,
         # noise); the plain medium loses nothing there
         return False
+
+    def _damaged(self, packet):
+        # what the channel does to the bytes of a packet it delivers
+        return packet
 
     def arriving(self, dst, src):
         # when the first bit of a packet from src in flight to dst arrives
