@@ -38,8 +38,10 @@ class Outgoing:
         self.refused = None  # reason byte when the receiver refused
 
     def fragment(self, index, poll):
+        # -> (head, bytes): see acomm.segment
         start = index * self.fragsize
-        return sg.frag_header(poll, self.lane, self.gen, index) + self.blob[start : start + self.fragsize]
+        head, first = sg.frag_header(poll, self.lane, self.gen, index)
+        return head, first + self.blob[start : start + self.fragsize]
 
     def new_round(self):
         # The missing fragments the next SACK can speak for.
@@ -52,18 +54,18 @@ class Outgoing:
         return self.round
 
     def next_fragment(self):
-        # -> (index, bytes) of the next fragment of the round, poll set on
-        # the last one; None when the round is all sent.
+        # -> (index, head, bytes) of the next fragment of the round, poll
+        # set on the last one; None when the round is all sent.
         if self.sent_in_round >= len(self.round):
             return None
         i = self.round[self.sent_in_round]
         self.sent_in_round += 1
-        return i, self.fragment(i, self.sent_in_round == len(self.round))
+        return (i,) + self.fragment(i, self.sent_in_round == len(self.round))
 
     def repoll(self):
         # after a timeout: the last fragment of the round again, with poll
         i = self.round[-1] if self.round else self.count - 1
-        return i, self.fragment(i, True)
+        return (i,) + self.fragment(i, True)
 
     def on_sack(self, s):
         # s: a decoded SACK segment for this lane and generation. Returns
@@ -72,14 +74,18 @@ class Outgoing:
             if s.reason is not None:
                 self.refused = s.reason
                 return True
-            if s.pid != self.pid or s.base != self.count:
+            if s.pid != self.pid or s.base != self.count & 0xFF:
                 return False  # a stale completion of an earlier packet
             self.complete = True
             for i in range(self.count):
                 self.acked[i] = 1
             self.base = self.count
             return True
-        base = s.base if s.base <= self.count else self.count
+        base = sg.unwrap(s.base, self.base)
+        if base > self.count:
+            base = self.count
+        elif base < 0:
+            base = 0
         for i in range(self.base, base):
             self.acked[i] = 1
         bm = s.bitmap
@@ -111,6 +117,7 @@ class Reassembly:
         self.header = None
         self.touched = now
         self.done_pid = None  # set once complete: the packet id we confirmed
+        self._base = 0  # fragments 0.._base-1 have all arrived
 
     def add(self, index, payload, now):
         # Raises DecodeError for a fragment that contradicts the packet.
@@ -123,6 +130,8 @@ class Reassembly:
             raise DecodeError("fragments overrun %d bytes" % self.max_bytes)
         self.frags[index] = bytes(payload)
         self.size += len(payload)
+        while self._base in self.frags:
+            self._base += 1
         if index == 0:
             h = sg.decode_packet_header(payload)
             total = h.size + h.length
@@ -146,10 +155,11 @@ class Reassembly:
         return out
 
     def base(self):
-        b = 0
-        while b in self.frags:
-            b += 1
-        return b
+        return self._base
+
+    def index_of(self, low):
+        # the fragment index a segment's index byte (mod 256) stands for
+        return sg.unwrap(low, self.count if self.done_pid is not None else self._base)
 
     def bitmap(self):
         b = self.base()

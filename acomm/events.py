@@ -72,7 +72,8 @@ EV_AVAILABILITY = const(22)
 EV_CAPS = const(23)
 EV_RANGE_RECEIVED = const(24)
 # Link -> transport (the node hands these to its transport, not to the
-# application): (EV_SEGMENT, link, src_id, dst_id or None, payload)
+# application): (EV_SEGMENT, link, src_id, dst_id or None, head, payload),
+# head: the frame header's sequence field (acomm.segment)
 EV_SEGMENT = const(25)
 # Transport -> application:
 #   (EV_PACKET_STATUS, pid, status, reason)   statuses as for requests

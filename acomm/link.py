@@ -211,12 +211,15 @@ class Link(Ranging):
         return nid
 
     # -- frame transmission request ----------------------------------------------
-    def request(self, now, req_id, dst, data, lifespan_s, priority=10, ack=False, retries=None, ftype=fr.DATA):
+    def request(self, now, req_id, dst, data, lifespan_s, priority=10, ack=False, retries=None, ftype=fr.DATA,
+                seq=None):
         # Returns True when accepted (status `queued` follows), False when
         # refused (status `failed` with the reason was already emitted).
         # retries: tries after the first when unacknowledged (None: the
         # link's max_retries; 0 for a schedule that must not repeat itself).
-        # ftype: DATA for applications, SEGMENT for the transport.
+        # ftype: DATA for applications, SEGMENT for the transport, which
+        # also gives seq: the frame header's sequence field carries the
+        # first bits of its segments (acomm.segment).
         if not 0 <= req_id <= 0xFFFF:
             return self._refuse(req_id & 0xFFFF, "request id outside 0..65535")
         if req_id in self._active:
@@ -237,7 +240,7 @@ class Link(Ranging):
             return self._refuse(req_id, "%d bytes exceed the %s MTU of %d" % (len(data), self.name, mtu))
         req = TxRequest(req_id, dst_id, priority, ticks_add(now, life_ms), bytes(data))
         # retries left; a broadcast cannot be acknowledged
-        req.meta = [(self.max_retries if retries is None else retries) if (ack and dst_id is not None) else -1, None, ftype]
+        req.meta = [(self.max_retries if retries is None else retries) if (ack and dst_id is not None) else -1, seq, ftype]
         return self._enqueue(req, now)
 
     def _enqueue(self, req, now):
@@ -531,7 +534,7 @@ class Link(Ranging):
         if f.ftype == fr.SEGMENT:
             # the transport's: it numbers and acknowledges its own fragments
             if mine:
-                self._emit((EV_SEGMENT, self, src, dst, f.payload))
+                self._emit((EV_SEGMENT, self, src, dst, f.seq, f.payload))
             return
         data = f.ftype == fr.DATA or f.ftype == fr.REPLY
         if not mine:

@@ -57,7 +57,7 @@ class Node:
         if t is not None:
             code = ev[0]
             if code == EV_SEGMENT:
-                t.on_segment(self._now, ev[1], ev[2], ev[3], ev[4])
+                t.on_segment(self._now, ev[1], ev[2], ev[3], ev[4], ev[5])
                 return
             if code == EV_STATUS and t.on_link_status(self._now, ev[2], ev[3], ev[4]):
                 return

@@ -3,19 +3,26 @@
 # (acomm.frame), never acknowledged by the link: the SACK is the transport's
 # own acknowledgement of a whole window of fragments.
 #
-# Fragment, 2 bytes then payload:
-#   byte 0  0 P T G iiii      P poll (answer with a SACK), T lane (two
-#   byte 1  iiiiiiii             transfers at a time to one neighbour), G
-#                                generation of the lane, i fragment index
-#                                (12 bits: 0..4095)
-# SACK, 2 bytes then a bitmap (0..MAX_BITMAP bytes):
-#   byte 0  1 C T G bbbb      C complete, b base (12 bits): every fragment
-#   byte 1  bbbbbbbb             below base has arrived. Bitmap bit j of
-#                                byte k: fragment base + 1 + 8k + j arrived.
-#   complete: base = the fragment count, and 2 bytes of packet id follow (the
-#   sender checks that the receiver completed *its* packet: after a restart
-#   of either side a lane's generation can be stale). base = 0 with C means
-#   refused (the receiver cannot take the packet), a reason byte follows.
+# A segment's first four bits ride in the link frame header's sequence
+# field, which SEGMENT frames have no other use for (the link neither
+# acknowledges nor filters them; the transport numbers its own fragments):
+#   head  K P T G      K: a SACK; P: poll (answer with a SACK), or for a
+#                      SACK C: complete; T: lane (two transfers at a time to
+#                      one neighbour); G: generation of the lane
+# then in the frame's payload:
+#   fragment  1 byte   fragment index mod 256, then the fragment's bytes
+#   SACK      1 byte   base mod 256: every fragment below base has arrived;
+#                      then a bitmap of 0..MAX_BITMAP bytes: bit j of byte k
+#                      set when fragment base + 1 + 8k + j arrived
+#   complete  3 bytes  (C) fragment count mod 256, packet id (2): the sender
+#                      checks that the receiver completed *its* packet (after
+#                      a restart of either side a lane's generation is stale)
+#   refused   2 bytes  (C) 0, then a reason: the receiver cannot take it
+# Indexes are sent mod 256 because neither side is ever more than a window
+# (WINDOW = 65 fragments, acomm.arq) from what the other knows: the
+# receiver reads an index as the one nearest its own base, the sender reads
+# a base as the one nearest its own (unwrap()). So one byte per fragment
+# carries the transfer state, and a packet may have up to 4096 fragments.
 #
 # Packet header, at the start of fragment 0's payload (the end-to-end part):
 #   flags    R Z 000000        R relay fields follow, Z body compressed
@@ -24,27 +31,27 @@
 #   R only:  origin, final destination (node ids), priority (1..16, one
 #            byte), lifespan left in seconds (2 bytes, saturating)
 # A packet sent straight to its neighbour costs 4 bytes (length < 128) plus
-# 2 per fragment; docs/wire-format.md has the examples.
+# 1 per fragment; docs/wire-format.md has the examples.
 
 from .compat import const
 from .errors import DecodeError, EncodeError
 
-FRAG_HEADER = const(2)
+FRAG_HEADER = const(1)
 MAX_INDEX = const(4095)
 MAX_BITMAP = const(8)  # 64 fragments after the base per SACK
 MAX_LENGTH = const((1 << 21) - 1)
 MAX_LIFE_S = const(65535)
 
-_K_SACK = const(0x80)
-_P = const(0x40)
-_C = const(0x40)
-_T = const(0x20)
-_G = const(0x10)
+_K_SACK = const(8)
+_P = const(4)
+_C = const(4)
+_T = const(2)
+_G = const(1)
 
 F_RELAY = const(0x80)
 F_COMPRESSED = const(0x40)
 
-# refusal reasons (SACK with C and base 0)
+# refusal reasons
 REFUSE_TOO_BIG = const(1)
 REFUSE_FULL = const(2)
 REFUSE_NO_ROUTE = const(3)
@@ -52,66 +59,79 @@ REFUSE_NAMES = {REFUSE_TOO_BIG: "too big for the receiver", REFUSE_FULL: "receiv
                 REFUSE_NO_ROUTE: "no route at the relay"}
 
 
+def _head(k, pc, lane, gen):
+    return k | (_P if pc else 0) | (_T if lane else 0) | (_G if gen else 0)
+
+
+def is_poll(head):
+    return not head & _K_SACK and bool(head & _P)
+
+
+def unwrap(low, ref):
+    # the value that is low mod 256 nearest to ref
+    return ref + ((low - ref + 128) & 0xFF) - 128
+
+
 def frag_header(poll, lane, gen, index):
+    # -> (head, the payload's first byte)
     if not 0 <= index <= MAX_INDEX:
         raise EncodeError("fragment index %d outside 0..%d" % (index, MAX_INDEX))
-    return bytes(((_P if poll else 0) | (_T if lane else 0) | (_G if gen else 0) | (index >> 8), index & 0xFF))
+    return _head(0, poll, lane, gen), bytes((index & 0xFF,))
 
 
 def sack(lane, gen, base, bitmap=b""):
     if len(bitmap) > MAX_BITMAP:
         raise EncodeError("SACK bitmap of %d bytes, at most %d" % (len(bitmap), MAX_BITMAP))
-    return bytes((_K_SACK | (_T if lane else 0) | (_G if gen else 0) | (base >> 8), base & 0xFF)) + bytes(bitmap)
+    return _head(_K_SACK, 0, lane, gen), bytes((base & 0xFF,)) + bytes(bitmap)
 
 
 def sack_complete(lane, gen, count, pid):
-    return bytes((_K_SACK | _C | (_T if lane else 0) | (_G if gen else 0) | (count >> 8), count & 0xFF, pid >> 8, pid & 0xFF))
+    return _head(_K_SACK, 1, lane, gen), bytes((count & 0xFF, pid >> 8, pid & 0xFF))
 
 
 def sack_refused(lane, gen, reason):
-    return bytes((_K_SACK | _C | (_T if lane else 0) | (_G if gen else 0), 0, reason & 0xFF))
+    return _head(_K_SACK, 1, lane, gen), bytes((0, reason & 0xFF))
 
 
 class Segment:
-    # A decoded segment: is_sack; lane, gen; for fragments poll, index,
-    # payload; for SACKs complete, base, bitmap, pid (complete) or reason
-    # (refused, base 0).
+    # A decoded segment: is_sack; lane, gen; for fragments poll, index (mod
+    # 256) and payload; for SACKs complete, base (mod 256), bitmap, pid
+    # (complete) or reason (refused).
     __slots__ = ("is_sack", "lane", "gen", "poll", "index", "payload", "complete", "base", "bitmap", "pid", "reason")
 
 
-def decode(data):
+def decode(head, data):
+    # head: the frame header's sequence field; data: the frame's payload
     n = len(data)
-    if n < 2:
-        raise DecodeError("segment of %d bytes" % n)
-    b0 = data[0]
+    if n < 1 or not 0 <= head <= 15:
+        raise DecodeError("segment of %d bytes, head %d" % (n, head))
     s = Segment()
-    s.is_sack = bool(b0 & _K_SACK)
-    s.lane = 1 if b0 & _T else 0
-    s.gen = 1 if b0 & _G else 0
-    v = ((b0 & 0x0F) << 8) | data[1]
+    s.is_sack = bool(head & _K_SACK)
+    s.lane = 1 if head & _T else 0
+    s.gen = 1 if head & _G else 0
     if not s.is_sack:
-        s.poll = bool(b0 & _P)
-        s.index = v
-        s.payload = data[2:]
+        s.poll = bool(head & _P)
+        s.index = data[0]
+        s.payload = data[1:]
+        if not s.payload:
+            raise DecodeError("fragment without bytes")
         return s
-    s.complete = bool(b0 & _C)
-    s.base = v
+    s.complete = bool(head & _C)
+    s.base = data[0]
     s.bitmap = b""
     s.pid = None
     s.reason = None
     if s.complete:
-        if v == 0:
-            if n != 3:
-                raise DecodeError("refusal of %d bytes" % n)
-            s.reason = data[2]
+        if n == 2 and data[0] == 0:
+            s.reason = data[1]
+        elif n == 3:
+            s.pid = (data[1] << 8) | data[2]
         else:
-            if n != 4:
-                raise DecodeError("completion of %d bytes" % n)
-            s.pid = (data[2] << 8) | data[3]
+            raise DecodeError("completion or refusal of %d bytes" % n)
     else:
-        if n - 2 > MAX_BITMAP:
-            raise DecodeError("SACK bitmap of %d bytes" % (n - 2))
-        s.bitmap = bytes(data[2:])
+        if n - 1 > MAX_BITMAP:
+            raise DecodeError("SACK bitmap of %d bytes" % (n - 1))
+        s.bitmap = bytes(data[1:])
     return s
 
 

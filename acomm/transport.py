@@ -49,7 +49,7 @@ __all__ = ("Transport", "MemoryStore")
 
 class _Packet:
     __slots__ = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link",
-                 "hop", "inflight", "timer", "relayed", "misses", "wait", "group", "chunks")
+                 "hop", "inflight", "polling", "timer", "relayed", "misses", "wait", "group", "chunks")
 
 
 def _wall_default():
@@ -124,7 +124,7 @@ class Transport(Receiving):
         p.origin, p.final, p.pid, p.prio, p.expiry = origin, final, pid, prio, expiry
         p.body, p.compressed, p.medium = body, compressed, medium
         p.out = p.link = p.hop = p.timer = p.wait = p.group = None
-        p.inflight = p.misses = p.chunks = 0
+        p.inflight = p.polling = p.misses = p.chunks = 0
         p.relayed = origin != self.node.node_id
         if not compressed and self.compress and len(body) > 16:
             z = compress(body)
@@ -206,7 +206,7 @@ class Transport(Receiving):
                 lanes[p.out.lane] = None
             p.out = None
         p.timer = None
-        p.inflight = p.misses = 0
+        p.inflight = p.polling = p.misses = 0
         for rid in [r for r in self._reqs if self._reqs[r][0] is p]:
             self._reqs[rid] = (None, 0, 0)  # its final status still comes: swallow it
             p.link.cancel(now, rid, "transfer abandoned")
@@ -251,12 +251,18 @@ class Transport(Receiving):
                 self._final(now, p, EXPIRED, "lifespan over")
             elif p.out is None:
                 self._start(p, now)
+        # a link with a poll out waits for the SACK: a half-duplex modem
+        # that sends another transfer's fragment meanwhile is deaf to it
+        held = []
+        for p in self._out:
+            if p.out is not None and (p.polling or p.timer is not None) and p.link not in held:
+                held.append(p.link)
         for p in list(self._out):
             if p.out is not None:
-                self._pump(p, now)
+                self._pump(p, now, p.link in held)
         self._rx_poll(now)
 
-    def _pump(self, p, now):
+    def _pump(self, p, now, held):
         o = p.out
         if p.timer is not None:
             if ticks_diff(now, p.timer) < 0:
@@ -275,7 +281,7 @@ class Transport(Receiving):
             self.stats["resent"] += 1
             self._request(p, now, o.repoll())
             return
-        while p.inflight < _PIPELINE:
+        while p.inflight < _PIPELINE and not held:
             if o.sent_in_round == len(o.round) - 1 and p.inflight:
                 # the poll goes last: the link queue may reorder, and a
                 # fragment after the poll would be on the air (deaf, half-
@@ -287,14 +293,17 @@ class Transport(Receiving):
             self._request(p, now, nf)
 
     def _request(self, p, now, nf):
-        index, data = nf
+        index, head, data = nf
         rid = self.node.next_req_id()
         life = p.expiry - self.wall()
         if life < 1:
             life = 1
-        if p.link.request(now, rid, self.node.names.name_of(p.hop), data, life, p.prio, False, None, SEGMENT):
-            self._reqs[rid] = (p, index, data[0] & 0x40)
+        if p.link.request(now, rid, self.node.names.name_of(p.hop), data, life, p.prio, False, None, SEGMENT, head):
+            poll = sg.is_poll(head)
+            self._reqs[rid] = (p, index, poll)
             p.inflight += 1
+            if poll:
+                p.polling += 1
             self.stats["fragments"] += 1
 
     def on_link_status(self, now, rid, status, reason):
@@ -311,6 +320,8 @@ class Transport(Receiving):
         if p is None:
             return True
         p.inflight -= 1
+        if poll:
+            p.polling -= 1
         if p.out is not None and poll:
             if status == TRANSMITTED:
                 p.timer = ticks_add(now, p.link.ack_timeout_ms)

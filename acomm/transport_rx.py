@@ -38,9 +38,9 @@ class Receiving:
         for k in [k for k in self._rx if ticks_diff(now, self._rx[k].touched) > _RX_TIMEOUT_MS]:
             del self._rx[k]
 
-    def on_segment(self, now, link, src, dst, payload):
+    def on_segment(self, now, link, src, dst, head, payload):
         try:
-            s = sg.decode(payload)
+            s = sg.decode(head, payload)
         except DecodeError:
             self.stats["rx_bad"] += 1
             return
@@ -55,9 +55,10 @@ class Receiving:
                 self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
                 return
             r = self._rx[key] = Reassembly(s.gen, self.max_packet + 16, now)
+        index = r.index_of(s.index)
         try:
             first = r.header is None
-            r.add(s.index, s.payload, now)
+            r.add(index, s.payload, now)
         except DecodeError:
             self.stats["rx_bad"] += 1
             del self._rx[key]
@@ -73,7 +74,7 @@ class Receiving:
                 del self._rx[key]
                 self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
                 return
-        if s.poll or (r.done_pid is not None and s.index == r.count - 1):
+        if s.poll or (r.done_pid is not None and index == r.count - 1):
             if r.done_pid is not None:
                 self._sack(now, link, src, sg.sack_complete(s.lane, s.gen, r.count, r.done_pid))
             else:
@@ -133,10 +134,12 @@ class Receiving:
         if len(self._done) > _DONE_MEMORY:
             self._done.pop(0)
 
-    def _sack(self, now, link, src, data, tries=0):
+    def _sack(self, now, link, src, seg, tries=0):
+        # seg: (head, bytes) from acomm.segment
         rid = self.node.next_req_id()
-        if link.request(now, rid, self.node.names.name_of(src), data, 60, _SACK_PRIORITY, False, None, SEGMENT):
-            self._sacks[rid] = (link, src, data, tries)
+        if link.request(now, rid, self.node.names.name_of(src), seg[1], 60, _SACK_PRIORITY, False, None, SEGMENT,
+                        seg[0]):
+            self._sacks[rid] = (link, src, seg, tries)
 
     def _sack_status(self, now, rid, status):
         # -> True when rid was one of our SACKs

@@ -76,8 +76,11 @@ def test_expiry_and_recovery_from_the_store():
 
 
 def test_segments_and_fragments_refuse_bad_input():
-    for bad in (b"", b"\x80", b"\xc0\x05\x00", b"\x80\x00" + b"\xff" * 9, b"\xc0\x00\x01\x02"):
-        raises(DecodeError, sg.decode, bad)
+    # (head, bytes): empty; a fragment with no bytes; a completion and a
+    # refusal of the wrong size; a bitmap too long; a head beyond 4 bits
+    for bad in ((0, b""), (4, b"\x03"), (12, b"\x05\x00"), (12, b"\x00\x01\x02\x03"), (8, b"\x00" + b"\xff" * 9),
+                (16, b"\x00\x01")):
+        raises(DecodeError, sg.decode, bad[0], bad[1])
     raises(DecodeError, sg.decode_packet_header, b"\x01\x00\x01\x05")  # unknown flag bits
     raises(DecodeError, sg.decode_packet_header, b"\x00\x00\x01\x85")  # length runs on
     r = Reassembly(0, 100, 0)
@@ -87,5 +90,28 @@ def test_segments_and_fragments_refuse_bad_input():
     raises(DecodeError, r.add, 5, b"y" * 10, 0)  # beyond the count
     o = Outgoing(sg.packet_header(9, 100) + bytes(100), 27, 0, 1, 9)
     o.new_round()
-    assert not o.on_sack(sg.decode(sg.sack_complete(0, 1, o.count, 8)))  # someone else's packet
-    assert o.on_sack(sg.decode(sg.sack(0, 1, 2, b"\x01"))) and o.base == 2 and o.acked[3] and not o.acked[2]
+    assert not o.on_sack(sg.decode(*sg.sack_complete(0, 1, o.count, 8)))  # someone else's packet
+    assert o.on_sack(sg.decode(*sg.sack(0, 1, 2, b"\x01"))) and o.base == 2 and o.acked[3] and not o.acked[2]
+
+
+def test_indexes_travel_mod_256_and_unwrap_near_the_base():
+    assert [sg.unwrap(low, 300) for low in (44, 172, 173, 171, 0)] == [300, 172, 173, 427, 256]
+    assert sg.unwrap(5, 0) == 5 and sg.unwrap(250, 0) == -6
+    # a 300-fragment packet: the receiver places fragments 255..300 right
+    blob = sg.packet_header(3, 300 * 8) + bytes(i % 251 for i in range(300 * 8))
+    o = Outgoing(blob, 8, 0, 0, 3)
+    r = Reassembly(0, 10000, 0)
+    while not o.complete:
+        o.new_round()
+        while True:
+            nf = o.next_fragment()
+            if nf is None:
+                break
+            s = sg.decode(nf[1], nf[2])
+            assert s.index == nf[0] & 0xFF
+            r.add(r.index_of(s.index), s.payload, 0)
+        b, bm = r.bitmap()
+        assert o.on_sack(sg.decode(*(sg.sack_complete(0, 0, r.count, 3) if r.complete() else sg.sack(0, 0, b, bm))))
+    assert r.complete() and r.blob() == blob and o.rounds == 5
+    head, data = o.fragment(299, True)
+    assert sg.is_poll(head) and data[0] == 299 - 256

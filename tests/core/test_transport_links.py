@@ -80,18 +80,21 @@ def test_bad_input_at_the_transport_is_counted_and_harmless():
     link = b.node.links["acoustic"]
     rng = Prng(3)
     for _ in range(300):  # forged and corrupted segments
-        tb.on_segment(w.now(), link, 2, 1, rng.bytes(rng.below(40)))
-    tb.on_segment(w.now(), link, 2, 1, sg.sack(0, 1, 3, b"\xff"))  # a SACK for nothing we sent
-    tb.on_segment(w.now(), link, 2, 1, sg.sack_complete(1, 0, 4, 999))
+        tb.on_segment(w.now(), link, 2, 1, rng.below(16), rng.bytes(rng.below(40)))
+    tb.on_segment(w.now(), link, 2, 1, *sg.sack(0, 1, 3, b"\xff"))  # a SACK for nothing we sent
+    tb.on_segment(w.now(), link, 2, 1, *sg.sack_complete(1, 0, 4, 999))
     bad = tb.stats["rx_bad"]
     assert bad >= 2 and not packets(b)
     # a fragment 0 that declares 2 MB: refused at once, with a reason for the sender
     head = sg.packet_header(77, 2000000)
-    tb.on_segment(w.now(), link, 2, 1, sg.frag_header(True, 0, 0, 0) + head + b"x" * 10)
+    h, first = sg.frag_header(True, 0, 0, 0)
+    tb.on_segment(w.now(), link, 2, 1, h, first + head + b"x" * 10)
     assert tb.stats["rx_bad"] == bad + 1 and ("acoustic", 2, 0) not in tb._rx
     # fragments beyond the count the first one declared
-    tb.on_segment(w.now(), link, 2, 1, sg.frag_header(False, 1, 0, 0) + sg.packet_header(78, 30) + b"y" * 20)
-    tb.on_segment(w.now(), link, 2, 1, sg.frag_header(True, 1, 0, 9) + b"z" * 24)
+    h, first = sg.frag_header(False, 1, 0, 0)
+    tb.on_segment(w.now(), link, 2, 1, h, first + sg.packet_header(78, 30) + b"y" * 20)
+    h, first = sg.frag_header(True, 1, 0, 9)
+    tb.on_segment(w.now(), link, 2, 1, h, first + b"z" * 24)
     assert tb.stats["rx_bad"] == bad + 2
     # the node still works
     pid = ta.send(w.now(), "buoy", b"still here", 600, 5)

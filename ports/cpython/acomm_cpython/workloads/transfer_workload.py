@@ -12,9 +12,10 @@
 # by the ideal for that modem: the modem's MTU filled with payload, frame
 # after frame, no acknowledgements, minus the loss:
 #     ideal = MTU * 8 / airtime(MTU) * (1 - loss)
-# The ideal counts acomm's 3 bytes per fragment (link header, fragment
-# header) as overhead: on a 30-byte SeaTrac frame they cap the ratio at
-# 27/30 = 0.90 before any acknowledgement is paid for.
+# The ideal counts acomm's 2 bytes per fragment (the link header, whose
+# sequence field carries the fragment's flags, and the fragment's index
+# byte) as overhead: on a 30-byte SeaTrac frame they cap the ratio at
+# 28/30 = 0.93 before any acknowledgement is paid for.
 from acomm.events import DELIVERED, EV_PACKET, EV_PACKET_STATUS, EV_STATUS
 from acomm.prng import Prng
 from acomm.transport import Transport
