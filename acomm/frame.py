@@ -168,6 +168,22 @@ def check_raw(data):
     return hlen
 
 
+def raw_addresses(data):
+    # (source, destination) node ids of a raw frame, destination BROADCAST
+    # for a broadcast, after check_raw's checks and without copying the
+    # payload: the IP links route and learn senders by them.
+    hlen = check_raw(data)
+    if hlen == 4:
+        wdst = data[2]
+        src = data[3]
+        if src > MAX_ADDR or wdst > MAX_ADDR:
+            raise DecodeError("reserved address 255 in frame header")
+    else:
+        wdst = data[2] >> 4
+        src = data[2] & 0x0F
+    return src, (BROADCAST if wdst == src else wdst)
+
+
 def decode_raw(data):
     hlen = check_raw(data)
     b0 = data[0]

@@ -6,7 +6,10 @@
 #
 # A stream is any object with read(n) -> bytes or None/b"" when nothing is
 # waiting, and write(bytes): machine.UART, acomm.fakeuart.FakeUART, or the
-# CPython port's serial and socket adapters.
+# CPython port's serial and socket adapters. A port that moves whole frames
+# to and from endpoints (UDP, TCP: acomm.drivers.datagram) has pump(now)
+# instead: it feeds the driver what arrived and sends what the driver has,
+# and the node calls it before and after each poll of the link.
 
 from .compat import const, ticks_ms
 from .events import EV_SEGMENT, EV_STATUS, is_final
@@ -27,6 +30,7 @@ class Node:
         self.listener = listener
         self.links = {}
         self._streams = {}
+        self._pumps = {}  # link name -> the frame port's pump, or None
         self._unsent = {}  # link name -> bytes a short write left behind
         self._req_id = 0
         # Without a listener, events wait here for the application to take
@@ -42,6 +46,7 @@ class Node:
         link = Link(name, driver, self.node_id, self.names, self._on_event, **options)
         self.links[name] = link
         self._streams[name] = stream
+        self._pumps[name] = getattr(stream, "pump", None) if stream is not None else None
         self._unsent[name] = b""
         return link
 
@@ -90,6 +95,12 @@ class Node:
         for name in self.links:
             link = self.links[name]
             stream = self._streams[name]
+            pump = self._pumps[name]
+            if pump is not None:
+                pump(now)
+                link.poll(now)
+                pump(now)
+                continue
             if stream is not None:
                 data = stream.read(_READ_CHUNK)
                 while data:
