@@ -63,9 +63,13 @@ class Outgoing:
         return (i,) + self.fragment(i, self.sent_in_round == len(self.round))
 
     def repoll(self):
-        # after a timeout: the last fragment of the round again, with poll
+        # after a timeout: a bare poll (the index byte, no fragment bytes).
+        # The SACK it brings says what is missing; sending the last
+        # fragment again instead would cost a full frame's airtime each
+        # time a short SACK was lost.
         i = self.round[-1] if self.round else self.count - 1
-        return (i,) + self.fragment(i, True)
+        head, first = sg.frag_header(True, self.lane, self.gen, i)
+        return i, head, first
 
     def on_sack(self, s):
         # s: a decoded SACK segment for this lane and generation. Returns

@@ -11,6 +11,7 @@
 #                      one neighbour); G: generation of the lane
 # then in the frame's payload:
 #   fragment  1 byte   fragment index mod 256, then the fragment's bytes
+#                      (none: a bare poll, sent again when a SACK is late)
 #   SACK      1 byte   base mod 256: every fragment below base has arrived;
 #                      then a bitmap of 0..MAX_BITMAP bytes: bit j of byte k
 #                      set when fragment base + 1 + 8k + j arrived
@@ -113,8 +114,8 @@ def decode(head, data):
         s.poll = bool(head & _P)
         s.index = data[0]
         s.payload = data[1:]
-        if not s.payload:
-            raise DecodeError("fragment without bytes")
+        if not s.payload and not s.poll:
+            raise DecodeError("fragment without bytes")  # only a bare poll has none
         return s
     s.complete = bool(head & _C)
     s.base = data[0]

@@ -49,7 +49,7 @@ __all__ = ("Transport", "MemoryStore")
 
 class _Packet:
     __slots__ = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link",
-                 "hop", "inflight", "polling", "timer", "relayed", "misses", "wait", "group", "chunks")
+                 "hop", "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks")
 
 
 def _wall_default():
@@ -72,6 +72,7 @@ class Transport(Receiving):
         self._lanes = {}  # (link name, hop id) -> [packet or None, packet or None]
         self._gens = {}  # (link name, hop id, lane) -> generation of its last transfer
         self._reqs = {}  # link request id -> (packet or None once abandoned, fragment index, poll flag)
+        self._rtt = {}  # (link name, hop id) -> [smoothed poll-to-SACK time, its mean deviation], ms
         self.stats = {"sent": 0, "delivered": 0, "expired": 0, "failed": 0, "received": 0, "relayed": 0,
                       "fragments": 0, "resent": 0, "sacks": 0, "rx_bad": 0, "rx_dup": 0, "refused": 0,
                       "store_full": 0, "failovers": 0}
@@ -123,7 +124,7 @@ class Transport(Receiving):
         p.key = (origin << 16) | pid
         p.origin, p.final, p.pid, p.prio, p.expiry = origin, final, pid, prio, expiry
         p.body, p.compressed, p.medium = body, compressed, medium
-        p.out = p.link = p.hop = p.timer = p.wait = p.group = None
+        p.out = p.link = p.hop = p.timer = p.polled = p.wait = p.group = None
         p.inflight = p.polling = p.misses = p.chunks = 0
         p.relayed = origin != self.node.node_id
         if not compressed and self.compress and len(body) > 16:
@@ -324,10 +325,38 @@ class Transport(Receiving):
             p.polling -= 1
         if p.out is not None and poll:
             if status == TRANSMITTED:
-                p.timer = ticks_add(now, p.link.ack_timeout_ms)
+                p.polled = now
+                p.timer = ticks_add(now, self._sack_timeout(p))
             else:
                 p.timer = now  # the poll never went: ask again at once
         return True
+
+    # -- how long to wait for a SACK -----------------------------------------------
+    # The link's ack timeout is sized for a full frame there and an ack
+    # back, and a poll is answered by a short SACK: after a lost poll or SACK
+    # the sender would sit idle for most of it. So, as TCP does, the time
+    # from a poll's end to its SACK is measured per link and neighbour
+    # (only for rounds without a repoll, whose SACK could answer either),
+    # and the wait is the smoothed time plus four deviations, at least
+    # twice the smoothed time and 1 s more (a receiver's modem may be busy
+    # a moment), at most twice the link's ack timeout.
+    def _sack_timeout(self, p):
+        e = self._rtt.get((p.link.name, p.hop))
+        cap = 2 * p.link.ack_timeout_ms
+        if e is None:
+            return p.link.ack_timeout_ms
+        t = e[0] + max(4 * e[1], e[0], 1000)
+        return cap if t > cap else t
+
+    def _rtt_sample(self, p, ms):
+        k = (p.link.name, p.hop)
+        e = self._rtt.get(k)
+        if e is None:
+            self._rtt[k] = [ms, ms // 2]
+        else:
+            err = ms - e[0]
+            e[0] += err // 8
+            e[1] += ((err if err > 0 else -err) - e[1]) // 4
 
     def _on_sack(self, now, link, src, s):
         lanes = self._lanes.get((link.name, src))
@@ -340,7 +369,9 @@ class Transport(Receiving):
             # kept a stale generation; start over on the other one
             self._abandon(now, p)
             return
-        p.timer = None
+        if p.polled is not None and p.misses == 0:
+            self._rtt_sample(p, ticks_diff(now, p.polled))
+        p.timer = p.polled = None
         p.misses = 0
         o = p.out
         if o.refused is not None:

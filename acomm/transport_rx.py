@@ -50,6 +50,9 @@ class Receiving:
             return
         key = (link.name, src, s.lane)
         r = self._rx.get(key)
+        if not s.payload:
+            self._answer_poll(now, link, src, s, r)
+            return
         if r is None or r.gen != s.gen:
             if len(self._rx) >= _MAX_RX:
                 self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
@@ -75,11 +78,18 @@ class Receiving:
                 self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
                 return
         if s.poll or (r.done_pid is not None and index == r.count - 1):
-            if r.done_pid is not None:
-                self._sack(now, link, src, sg.sack_complete(s.lane, s.gen, r.count, r.done_pid))
-            else:
-                b, bm = r.bitmap()
-                self._sack(now, link, src, sg.sack(s.lane, s.gen, b, bm))
+            self._answer_poll(now, link, src, s, r)
+
+    def _answer_poll(self, now, link, src, s, r):
+        if r is None or r.gen != s.gen:
+            # a bare poll for a transfer we have nothing of (our memory of
+            # it timed out, or this node restarted): all is missing
+            self._sack(now, link, src, sg.sack(s.lane, s.gen, 0))
+        elif r.done_pid is not None:
+            self._sack(now, link, src, sg.sack_complete(s.lane, s.gen, r.count, r.done_pid))
+        else:
+            b, bm = r.bitmap()
+            self._sack(now, link, src, sg.sack(s.lane, s.gen, b, bm))
 
     def _can_take(self, h):
         if h.relay is None or h.relay[1] == self.node.node_id:

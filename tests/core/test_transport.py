@@ -78,7 +78,7 @@ def test_expiry_and_recovery_from_the_store():
 def test_segments_and_fragments_refuse_bad_input():
     # (head, bytes): empty; a fragment with no bytes; a completion and a
     # refusal of the wrong size; a bitmap too long; a head beyond 4 bits
-    for bad in ((0, b""), (4, b"\x03"), (12, b"\x05\x00"), (12, b"\x00\x01\x02\x03"), (8, b"\x00" + b"\xff" * 9),
+    for bad in ((0, b""), (0, b"\x03"), (12, b"\x05\x00"), (12, b"\x00\x01\x02\x03"), (8, b"\x00" + b"\xff" * 9),
                 (16, b"\x00\x01")):
         raises(DecodeError, sg.decode, bad[0], bad[1])
     raises(DecodeError, sg.decode_packet_header, b"\x01\x00\x01\x05")  # unknown flag bits
@@ -115,3 +115,6 @@ def test_indexes_travel_mod_256_and_unwrap_near_the_base():
     assert r.complete() and r.blob() == blob and o.rounds == 5
     head, data = o.fragment(299, True)
     assert sg.is_poll(head) and data[0] == 299 - 256
+    i, head, data = o.repoll()  # a bare poll: the index byte and nothing else
+    s = sg.decode(head, data)
+    assert s.poll and s.payload == b"" and data == bytes((i & 0xFF,))
