@@ -1,0 +1,238 @@
+# The life of a driver for a Hayes-AT surface modem (Iridium SBD, GSM SMS),
+# shared by both: the start-up sequence, "up" and "down" (a modem that stops
+# answering, restarts, or has no signal), the periodic signal poll that also
+# serves as keepalive, and the one-request slot (acomm.drivers.slotbase).
+# The subclass gives the command list, the work it does when the modem is
+# up (_work), what its commands' answers mean (_result, _info), its URCs
+# (_urc), how it reads the signal (_signal_ok) and what a restart does to
+# its request (_lost).
+#
+# Start-up: each step is (command, wanted info prefix or None, timeout or
+# None). A step that fails (ERROR, timeout, missing info) starts the list
+# again after retry_ms; the driver says it is down once after down_after
+# failed rounds. After "ATE0" has been answered an echo of our own command
+# means the modem restarted and lost its settings; so do banner lines.
+# down_after commands in a row without an answer make it restart too.
+#
+# Signal: the subclass turns the +CSQ answer into "usable or not". Without
+# signal ready() is false (the link keeps its frames, ordered, in its own
+# queue), caps.bitrate is 0 (so the transport's router prefers other links),
+# and the driver says EV_DRIVER_DOWN "no signal" once; EV_DRIVER_UP when it
+# comes back.
+
+from ..compat import const, ticks_add, ticks_diff
+from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP
+from .atcommand import R_OK, R_TIMEOUT, AtChannel
+from .slotbase import IDLE, S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
+
+T_CONFIG = const(1)
+T_CSQ = const(2)
+# the subclasses number their own command tags from 10
+
+
+class AtSlot(SlotBase):
+    # the one request: a copy of its bytes until the modem has it
+    def accept(self, handle, kind, addr, data):
+        self._take(handle, kind, addr, data)
+
+
+class AtDriver(SlotDriver):
+    def __init__(self, steps, urcs, mtu, line_cap, block_cap, cmd_timeout_ms, retry_ms, down_after,
+                 csq_period_ms, csq_retry_ms, csq_timeout_ms, banner_marks):
+        SlotDriver.__init__(self)
+        self.steps = steps
+        self.cmd_timeout_ms = cmd_timeout_ms
+        self.retry_ms = retry_ms
+        self.down_after = down_after
+        self.csq_period_ms = csq_period_ms
+        self.csq_retry_ms = csq_retry_ms
+        self.csq_timeout_ms = csq_timeout_ms
+        self.banner_marks = banner_marks
+        self.at = AtChannel(self, urcs, line_cap, block_cap)
+        self.config = self  # SlotDriver's start(now) / down_reported
+        self.slot = AtSlot(self, mtu)
+        self.down_reported = False
+        self.signal = None  # the last +CSQ value, on the modem's scale
+        self.signal_ok = False
+        self.problem = None  # why the last start-up round failed
+        self.stats = {"reboots": 0, "unexpected": 0, "refused": 0}
+        self._bitrate = 0  # caps.bitrate while there is signal
+        self._step = 0
+        self._step_seen = False
+        self._wait = None
+        self._fails = 0
+        self._silent = 0
+        self._echo_off = False
+        self._csq_at = None
+        self._signal_said = None  # what the link was last told (True up)
+        self._now = 0
+
+    @property
+    def junk(self):
+        return self.at.junk
+
+    def ready(self, now):
+        return SlotDriver.ready(self, now) and self.signal_ok
+
+    # -- the driver interface ------------------------------------------------------
+    def feed(self, now, data):
+        self._now = now
+        self.at.feed(data)
+        self._pump(now)
+
+    def poll(self, now):
+        self._now = now
+        self._begin(now)
+        self.at.poll(now)
+        self._tick(now)
+        self._pump(now)
+
+    def _pump(self, now):
+        # the next command, once the line is free
+        at = self.at
+        if self._state == S_START or at.busy(now):
+            return
+        if self._state == S_CONFIG:
+            if self._wait is not None:
+                if ticks_diff(now, self._wait) < 0:
+                    return
+                self._wait = None
+            text, _, tmo = self.steps[self._step]
+            self._step_seen = False
+            at.command(now, text, T_CONFIG, tmo or self.cmd_timeout_ms)
+            return
+        if self._work(now):
+            return
+        if self._csq_at is None or ticks_diff(now, self._csq_at) >= 0:
+            self.poll_signal(now)
+
+    def poll_signal(self, now):
+        self._csq_at = ticks_add(now, self.csq_period_ms if self.signal_ok else self.csq_retry_ms)
+        self.at.command(now, b"AT+CSQ", T_CSQ, self.csq_timeout_ms)
+
+    def signal_soon(self, now):
+        # read the signal before the next session (after a failed one)
+        self._csq_at = now
+
+    # -- the start-up sequence -----------------------------------------------------
+    def start(self, now):
+        self._step = 0
+        self._wait = None
+        self._echo_off = False
+
+    def _config_result(self, now, code, line):
+        text, want, _ = self.steps[self._step]
+        if code != R_OK or (want is not None and not self._step_seen):
+            what = "no reply" if code == R_TIMEOUT else (line.decode() if code != R_OK else "no %s" % want.decode())
+            self._config_failed(now, "%s: %s" % (text.decode(), what))
+            return
+        if text == b"ATE0":
+            self._echo_off = True
+        self._step += 1
+        if self._step >= len(self.steps):
+            self._fails = 0
+            self.problem = None
+            self.down_reported = False
+            self._silent = 0
+            self._went_up()
+            self._signal_said = True
+            self._csq_at = ticks_add(now, self.csq_period_ms)
+            self._say_signal(now)
+
+    def _config_failed(self, now, reason):
+        self.problem = reason
+        self._fails += 1
+        if self._fails >= self.down_after and not self.down_reported:
+            self.down_reported = True
+            self._events.append((EV_DRIVER_DOWN, reason))
+        self._step = 0
+        self._wait = ticks_add(now, self.retry_ms)
+
+    # -- the signal ----------------------------------------------------------------
+    def set_signal(self, now, value):
+        self.signal = value
+        ok = self._signal_ok(value)
+        if ok != self.signal_ok:
+            self.signal_ok = ok
+            self.caps.bitrate = self._bitrate if ok else 0
+            if self._state == S_UP:
+                self._say_signal(now)
+
+    def _say_signal(self, now):
+        ok = self.signal_ok
+        if self._signal_said != ok:
+            self._signal_said = ok
+            self._events.append((EV_DRIVER_UP,) if ok else (EV_DRIVER_DOWN, "no signal"))
+        if not ok:
+            self._csq_at = ticks_add(now, self.csq_retry_ms)
+
+    # -- answers from the AT channel (its sink) ----------------------------------------
+    def on_result(self, tag, code, line):
+        now = self._now
+        if code == R_TIMEOUT:
+            self._silent += 1
+        else:
+            self._silent = 0
+        if tag == T_CONFIG:
+            self._config_result(now, code, line)
+            return
+        if tag != T_CSQ:
+            self._result(now, tag, code, line)
+        if self._silent >= self.down_after and self._state == S_UP:
+            self.lost(now, "modem not answering")
+
+    def on_info(self, tag, line):
+        if line.startswith(b"+CSQ"):
+            v = self._parse_signal(line)
+            if v is None:
+                self.stats["unexpected"] += 1
+            else:
+                self.set_signal(self._now, v)
+                self._step_seen = True
+            return
+        if tag == T_CONFIG:
+            want = self.steps[self._step][1]
+            if want is not None and line.startswith(want):
+                self._step_seen = True
+            return
+        if not self._info(tag, line):
+            self.stats["unexpected"] += 1
+
+    def on_prompt(self, tag):
+        self._prompt(self._now, tag)
+
+    def on_block(self, tag, buf, n):
+        self._block(self._now, tag, buf, n)
+
+    def on_urc(self, line):
+        if self._state == S_UP:
+            self._urc(self._now, line)
+
+    def on_echo(self):
+        if self._echo_off:
+            # ATE0 was answered: a modem that echoes again has restarted
+            self.stats["reboots"] += 1
+            self.lost(self._now, "modem restarted (its echo is back)")
+
+    def on_stray(self, line):
+        for m in self.banner_marks:
+            if line.startswith(m):
+                self.stats["reboots"] += 1
+                if self._state != S_START:
+                    self.lost(self._now, "modem rebooted")
+                return
+        self.stats["unexpected"] += 1
+
+    # -- restarts ------------------------------------------------------------------------
+    def lost(self, now, reason):
+        # The modem restarted or fell silent: configure it again; the
+        # subclass decides what becomes of its request.
+        self._went_down(reason)
+        self.at.reset()
+        self._silent = 0
+        self._state = S_CONFIG
+        self.start(now)
+        self._lost(now, reason)
+
+    def slot_idle(self):
+        return self.slot.state == IDLE

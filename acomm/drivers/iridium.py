@@ -1,0 +1,383 @@
+# Driver for Iridium 9602/9603 SBD transceivers (RockBLOCK) over their AT
+# command interface, ref/modem-protocols.md section 5. Sans-IO (interface in
+# acomm.drivers); runs on a buoy's microcontroller. docs/drivers-iridium.md
+# says what goes on the wire and how the answers map to acomm statuses.
+#
+# Iridium has no node addressing of its own: every MO message goes to the
+# gateway, which hands it on by its own rules (a fleet's vendor application,
+# or RockBLOCK's "RB<serial>" prefix, `mo_prefix`). So the caps lack
+# CAP_ADDRESSING, the link above sends raw acomm frames (node ids and CRC in
+# the frame), and send() ignores `addr`. EV_TX_DONE means "handed to the
+# gateway" (a successful SBDIX), never "delivered".
+#
+# One MO message at a time (ready() is false from send() until its final
+# event and during any session). Its life:
+#   QUEUED   AT+SBDWB=<n> -> READY -> bytes + sum16 -> "0" OK   (LOADED)
+#   LOADED   AT+SBDIX (AT+SBDIXA after a ring alert) when the back-off time
+#            has come and there is signal                       (SESSION)
+#   SESSION  +SBDIX: <mo>,<momsn>,<mt>,<mtmsn>,<mtlen>,<queued>  OK
+#            mo <= 4: EV_TX_DONE; otherwise another session after a
+#            back-off that doubles from retry_first_ms up to retry_max_ms,
+#            and EV_TX_FAILED (the MO status's name) once give_up_ms have
+#            passed since send()
+# After a session: AT+SBDRB when an MT message came (checksum and length
+# checked, read again when damaged), AT+SBDD0 to clear the MO buffer (a
+# later mailbox check must not send it again), and another session while
+# the gateway says more MT messages are queued. A ring alert (SBDRING, with
+# AT+SBDMTA=1 at start-up) starts a session at once; with nothing to send
+# and no ring alert for mailbox_check_ms, an empty session checks the
+# mailbox (seed 000 section IV.F).
+
+from ..caps import Capabilities
+from ..compat import const, ticks_add, ticks_diff
+from ..errors import AcommError, DecodeError, EncodeError
+from ..events import EV_RX, EV_TX_DONE, EV_TX_FAILED
+from . import iridium_wire as w
+from .atcommand import R_END, R_OK, R_TIMEOUT
+from .atdriver import AtDriver
+from .slotbase import IDLE, QUEUED, S_UP
+
+# slot states after slotbase's IDLE and QUEUED
+WRITING = const(2)
+LOADED = const(3)
+SESSION = const(4)
+
+K_MO = const(0)
+
+T_WB = const(10)
+T_IX = const(11)
+T_RB = const(12)
+T_DD = const(13)
+
+_CLEAR_TRIES = const(3)
+
+
+class IridiumDriver(AtDriver):
+    def __init__(
+        self,
+        address=None,
+        mo_mtu=w.MO_MAX,
+        mt_mtu=w.MT_MAX,
+        mo_prefix=b"",
+        cost_tx=0.02,
+        cost_rx=0.02,
+        latency_ms=20000,
+        bitrate=100,
+        ring_alerts=True,
+        mailbox_check_ms=600000,
+        retry_first_ms=20000,
+        retry_max_ms=160000,
+        give_up_ms=600000,
+        min_bars=1,
+        cmd_timeout_ms=5000,
+        sbdix_timeout_ms=60000,
+        wb_timeout_ms=65000,
+        csq_timeout_ms=12000,
+        csq_period_ms=60000,
+        csq_retry_ms=20000,
+        retry_ms=5000,
+        down_after=3,
+        wb_tries=3,
+        rb_tries=3,
+        banner_marks=(),
+    ):
+        if not 1 <= mo_mtu <= 1960 or not 1 <= mt_mtu <= 1890:
+            raise AcommError("SBD messages are at most 1960 bytes MO and 1890 MT")
+        if len(mo_prefix) >= mo_mtu:
+            raise AcommError("the MO prefix leaves no room for data")
+        steps = [(b"AT", None, None), (b"ATE0", None, None), (b"AT&K0", None, None)]
+        if ring_alerts:
+            steps.append((b"AT+SBDMTA=1", None, None))
+        steps.append((b"AT+SBDD0", None, None))
+        steps.append((b"AT+CSQ", b"+CSQ", csq_timeout_ms))
+        AtDriver.__init__(self, steps, (b"SBDRING", b"+CIEV:", b"+AREG:"), mo_mtu, 64, mt_mtu, cmd_timeout_ms,
+                          retry_ms, down_after, csq_period_ms, csq_retry_ms, csq_timeout_ms, banner_marks)
+        self.address = address  # not used: Iridium does not address nodes
+        self.broadcast_addr = None
+        self.mo_prefix = bytes(mo_prefix)
+        self.min_bars = min_bars
+        self.mailbox_check_ms = mailbox_check_ms
+        self.retry_first_ms = retry_first_ms
+        self.retry_max_ms = retry_max_ms
+        self.give_up_ms = give_up_ms
+        self.sbdix_timeout_ms = sbdix_timeout_ms
+        self.wb_timeout_ms = wb_timeout_ms
+        self.wb_tries = wb_tries
+        self.rb_tries = rb_tries
+        self._bitrate = bitrate
+        self.caps = Capabilities(
+            manufacturer="Iridium",
+            model="9602/9603 SBD",
+            cost_tx=cost_tx,
+            cost_rx=cost_rx,
+            mtu_tx=mo_mtu - len(mo_prefix),
+            mtu_rx=mt_mtu,
+            bitrate=0,  # until the modem reports signal
+            latency_ms=latency_ms,
+            flags=0,
+        )
+        self.last_session = None  # the last +SBDIX fields
+        self.last_failure = None  # why the last session failed
+        self.stats.update({
+            "sessions": 0, "sessions_failed": 0, "mailbox_checks": 0, "rings": 0, "mo_sent": 0, "mo_failed": 0,
+            "mt_received": 0, "mt_bad": 0, "mt_lost": 0, "malformed": 0, "clear_failed": 0, "urcs_other": 0,
+        })
+        # the MO message in the slot
+        self._first_at = 0
+        self._sessions = 0
+        self._wait = 0
+        self._next_at = 0
+        self._wb_fails = 0
+        # the modem and the gateway
+        self._mo_loaded = False  # the MO buffer may hold a message: SBDD0 before an empty session
+        self._mt_unread = False  # the last session left an MT message in the MT buffer
+        self._mt_waiting = 0  # MT messages queued at the gateway (last session)
+        self._ring = False
+        self._in_session = False  # an empty session (mailbox, ring alert, MT queued) under way
+        self._mailbox_at = None
+        self._idle_wait = 0  # back-off of failed empty sessions
+        self._idle_at = None
+        self._status = None  # the digit that answers SBDWB / SBDD
+        self._ix = None
+        self._rb_good = False
+        self._rb_fails = 0
+        self._dd_fails = 0
+
+    # -- the driver interface ------------------------------------------------------
+    def ready(self, now):
+        return AtDriver.ready(self, now) and not self._in_session
+
+    def send(self, now, addr, data, ack=False):
+        # addr and ack are ignored (see the header)
+        if not self.ready(now):
+            raise AcommError("Iridium modem not ready")
+        n = len(data)
+        if not 1 <= n <= self.caps.mtu_tx:
+            raise EncodeError("an SBD message is 1..%d bytes, not %d" % (self.caps.mtu_tx, n))
+        self._first_at = now
+        self._sessions = 0
+        self._wait = 0
+        self._wb_fails = 0
+        return self._accept(now, K_MO, addr, data)
+
+    def _signal_ok(self, bars):
+        return bars >= self.min_bars
+
+    def _parse_signal(self, line):
+        try:
+            return w.parse_csq(line)
+        except DecodeError:
+            return None
+
+    # -- what to do next -------------------------------------------------------------
+    def _tick(self, now):
+        s = self.slot
+        if (s.state == QUEUED or s.state == LOADED) and ticks_diff(now, self._first_at) >= self.give_up_ms:
+            if self._state != S_UP:
+                why = "modem not answering"
+            elif not self.signal_ok:
+                why = "no signal"
+            else:
+                why = self.last_failure or "no session"
+            self._fail("%s (gave up after %d sessions)" % (why, self._sessions))
+
+    def _work(self, now):
+        # the next command when the modem is up and the line free; True
+        # when one was written
+        at = self.at
+        s = self.slot
+        if self._mailbox_at is None:
+            self._mailbox_at = ticks_add(now, self.mailbox_check_ms)
+        if self._mt_unread:
+            self._rb_good = False
+            at.command(now, b"AT+SBDRB", T_RB, self.cmd_timeout_ms, block=True)
+            return True
+        if self._mo_loaded and s.state == IDLE:
+            self._status = None
+            at.command(now, b"AT+SBDD0", T_DD, self.cmd_timeout_ms)
+            return True
+        if s.state == QUEUED:
+            s.state = WRITING
+            self._status = None
+            at.command(now, b"AT+SBDWB=%d" % (len(self.mo_prefix) + s.n), T_WB, self.cmd_timeout_ms,
+                       prompt=b"READY", ends=(b"1",))
+            return True
+        if not self.signal_ok:
+            return False
+        if s.state == LOADED:
+            if self._ring or ticks_diff(now, self._next_at) >= 0:
+                s.state = SESSION
+                self._session(now)
+                return True
+            return False
+        if s.state != IDLE or (self._idle_at is not None and ticks_diff(now, self._idle_at) < 0):
+            return False
+        mailbox = self.mailbox_check_ms and ticks_diff(now, self._mailbox_at) >= 0
+        if self._ring or self._mt_waiting > 0 or mailbox:
+            if not self._ring and not self._mt_waiting:
+                self.stats["mailbox_checks"] += 1
+            self._in_session = True
+            self._session(now)
+            return True
+        return False
+
+    def _session(self, now):
+        self._ix = None
+        self.stats["sessions"] += 1
+        self.at.command(now, b"AT+SBDIXA" if self._ring else b"AT+SBDIX", T_IX, self.sbdix_timeout_ms)
+
+    # -- answers ---------------------------------------------------------------------
+    def _info(self, tag, line):
+        if tag == T_WB or tag == T_DD:
+            self._status = w.parse_status(line)
+            return self._status is not None
+        if tag == T_IX:
+            try:
+                self._ix = w.parse_sbdix(line)
+            except DecodeError:
+                self.stats["malformed"] += 1
+            return True
+        return False
+
+    def _prompt(self, now, tag):
+        if tag != T_WB:
+            self.stats["unexpected"] += 1
+            return
+        s = self.slot
+        self.at.write(w.sbdwb_data(self.mo_prefix + s.buf[: s.n]), now, self.wb_timeout_ms)
+
+    def _block(self, now, tag, buf, n):
+        if tag != T_RB:
+            self.stats["unexpected"] += 1
+        elif n and not w.block_ok(buf, n):
+            self.stats["mt_bad"] += 1
+        else:
+            self._rb_good = True
+            if n:
+                self.stats["mt_received"] += 1
+                self._events.append((EV_RX, None, None, bytes(buf[:n])))
+
+    def _result(self, now, tag, code, line):
+        if tag == T_WB:
+            self._written(now, code, line)
+        elif tag == T_IX:
+            self._in_session = False
+            if code == R_OK and self._ix is not None:
+                self._session_done(now, self._ix, None)
+            else:
+                why = "no reply" if code == R_TIMEOUT else (line.decode() if code != R_OK else "no +SBDIX report")
+                self._session_done(now, None, "SBDIX: " + why)
+        elif tag == T_RB:
+            if code == R_OK and self._rb_good:
+                self._mt_unread = False
+            else:
+                self._rb_fails += 1
+                if self._rb_fails >= self.rb_tries:
+                    self.stats["mt_lost"] += 1
+                    self._mt_unread = False
+        elif tag == T_DD:
+            if code == R_OK and self._status == 0:
+                self._mo_loaded = False
+                self._dd_fails = 0
+            else:
+                self._dd_fails += 1
+                if self._dd_fails >= _CLEAR_TRIES:
+                    # go on: the next session may send the old MO again,
+                    # and the receiving link drops the copy
+                    self.stats["clear_failed"] += 1
+                    self._mo_loaded = False
+                    self._dd_fails = 0
+
+    def _written(self, now, code, line):
+        s = self.slot
+        if s.state != WRITING:
+            return
+        st = self._status
+        if code == R_OK and st == 0:
+            s.state = LOADED
+            self._mo_loaded = True
+            self._next_at = now
+            return
+        self._mo_loaded = True  # part of it may be there
+        if code == R_END:
+            why = "SBDWB status 1: the modem timed out waiting for the data"
+        elif code == R_OK and st == 2:
+            why = "SBDWB status 2: checksum mismatch"
+        elif code == R_OK and st == 3:
+            self._fail("SBDWB status 3: bad message size")
+            return
+        elif code == R_TIMEOUT:
+            why = "SBDWB: no reply"
+        else:
+            why = "SBDWB: %s" % (line.decode() if code != R_OK else "no status")
+        self.last_failure = why
+        self._wb_fails += 1
+        if self._wb_fails >= self.wb_tries:
+            self._fail(why)
+        else:
+            s.state = QUEUED
+
+    def _session_done(self, now, r, why):
+        s = self.slot
+        mo_session = s.state == SESSION
+        if r is not None:
+            self.last_session = r
+            if r[2] == 1:
+                self._mt_unread = True
+                self._rb_fails = 0
+            if r[0] <= w.MO_SUCCESS_MAX:
+                self._mt_waiting = r[5]
+                self._ring = False
+                self._mailbox_at = ticks_add(now, self.mailbox_check_ms)
+                self._idle_wait = 0
+                self._idle_at = None
+                if mo_session:
+                    s.state = IDLE
+                    self.stats["mo_sent"] += 1
+                    self._events.append((EV_TX_DONE, s.handle))
+                return
+            why = "MO status %d: %s" % (r[0], w.mo_status_name(r[0]))
+        self.stats["sessions_failed"] += 1
+        self.last_failure = why
+        self.signal_soon(now)
+        if not mo_session:
+            # an empty session: again after its own back-off
+            self._idle_wait = self._backoff(self._idle_wait)
+            self._idle_at = ticks_add(now, self._idle_wait)
+            return
+        self._sessions += 1
+        if ticks_diff(now, self._first_at) >= self.give_up_ms:
+            self._fail("%s (gave up after %d sessions)" % (why, self._sessions))
+            return
+        s.state = LOADED
+        self._wait = self._backoff(self._wait)
+        self._next_at = ticks_add(now, self._wait)
+
+    def _backoff(self, wait):
+        return self.retry_first_ms if not wait else min(2 * wait, self.retry_max_ms)
+
+    def _fail(self, why):
+        s = self.slot
+        s.state = IDLE
+        self.stats["mo_failed"] += 1
+        self._events.append((EV_TX_FAILED, s.handle, why))
+
+    def _urc(self, now, line):
+        if line == b"SBDRING":
+            self.stats["rings"] += 1
+            self._ring = True
+            self._idle_at = None
+            self._mailbox_at = ticks_add(now, self.mailbox_check_ms)
+        else:
+            self.stats["urcs_other"] += 1
+
+    def _lost(self, now, reason):
+        # The modem restarted or went silent: what it held may be gone, so
+        # the MO message is written again once it is back (its give-up
+        # time still runs).
+        s = self.slot
+        if s.state == WRITING or s.state == LOADED or s.state == SESSION:
+            s.state = QUEUED
+            self._mo_loaded = True
+        self._in_session = False
+        self._mailbox_at = None

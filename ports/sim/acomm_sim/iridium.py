@@ -1,0 +1,205 @@
+# An emulated Iridium 9602/9603 SBD transceiver (RockBLOCK) that speaks the
+# AT interface of ref/modem-protocols.md section 5 byte for byte, so that
+# acomm's driver, someone else's software or a terminal program can drive
+# it. Sans-IO: feed(now, bytes), poll(now), take_output(). Sessions go
+# through a shared acomm_sim.iridium_net.IridiumNetwork (the gateway).
+#
+# Commands: AT, ATE0/ATE1, AT&K0/AT&K3, AT&W0, AT&F0, AT*R1, ATI<n>,
+# AT+CGSN, AT+CSQ, AT+CSQF, AT+CRIS, AT+CIER=..., AT+SBDAREG=<n>,
+# AT+SBDMTA=<0|1>, AT+SBDMTA?, AT+SBDWB=<n>, AT+SBDWT=<text>, AT+SBDRB,
+# AT+SBDRT, AT+SBDIX, AT+SBDIXA, AT+SBDD0/1/2, AT+SBDS, AT+SBDTC. Anything
+# else: ERROR. Answers are `text CR LF` as in the reference's example.
+#
+# A session takes session_ms, during which the modem takes no command. Its
+# MO status: the next armed failure (fail_sessions), else 32 (no network
+# service) while bars is 0, else 0. On success the MO buffer (if any) goes
+# to the gateway (it stays in the buffer until AT+SBDD0/2, as on the real
+# modem) and the oldest MT message waiting there comes into the MT buffer.
+#
+# Fault modes: fail_sessions(code, count) (e.g. 32 no network, 18 RF drop,
+# 11 MO queue full), set_bars(n) (0: no signal), the gateway's MT queue
+# (network.queue_mt), plus acomm_sim.faults': corrupt_next(b"SBDRB") damages
+# the block's checksum, corrupt_next / truncate_next(b"+SBDIX") the report,
+# swallow_next(b"AT+SBDIX") a command never answered, noise, reboot(now).
+
+from acomm.drivers import iridium_wire as w
+
+from .atmodem import AtModem
+from .iridium_net import network_of
+
+
+class IridiumEmulator(AtModem):
+    def __init__(self, medium, address=1, now=0, imei=None, serial=None, bars=5, session_ms=8000,
+                 mo_max=w.MO_MAX, mt_max=w.MT_MAX, wb_timeout_ms=60000, csq_ms=0, boot_ms=2000, banner=()):
+        AtModem.__init__(self, now, banner, boot_ms, b"")
+        self.net = network_of(medium)
+        self.address = address
+        self.imei = imei or "3002340100%05d" % address
+        self.serial = serial or "%07d" % address
+        self.bars = bars
+        self.session_ms = session_ms
+        self.mo_max = mo_max
+        self.mt_max = mt_max
+        self.wb_timeout_ms = wb_timeout_ms
+        self.csq_ms = csq_ms
+        self.momsn = 0
+        self.mtmsn = 0
+        self.sessions = []  # (command, MO status, MO bytes or None), for tests
+        self._fails = []
+        self._reset()
+        self.net.attach(self)
+
+    def _reset(self):
+        # power-up values: nothing survives a restart on the 9602
+        self.mta = False
+        self.mo = None
+        self.mt = b""
+        self.ring = False  # an SBD ring alert since the last session (+CRIS sri)
+        self._ring_due = False
+
+    # -- faults ------------------------------------------------------------------------------
+    def fail_sessions(self, code, count=1):
+        self._fails.extend([code] * count)
+
+    def set_bars(self, bars):
+        self.bars = bars
+
+    # -- the gateway -----------------------------------------------------------------------------
+    def ring_alert(self, now):
+        if self.mta and self._booting_until is None:
+            self.ring = True
+            if self._later is None and self._data is None:
+                self.notify(b"SBDRING")
+            else:
+                self._ring_due = True  # when the modem is back in command mode
+
+    def poll(self, now):
+        self.net.poll(now)
+        AtModem.poll(self, now)
+        if self._ring_due and self._later is None and self._data is None and self._booting_until is None:
+            self._ring_due = False
+            self.notify(b"SBDRING")
+
+    def idle(self, now):
+        return AtModem.idle(self, now) and not self.net.busy()
+
+    # -- commands ----------------------------------------------------------------------------------
+    def _command(self, now, text):
+        c = text[2:].upper()
+        if c == b"":
+            self.ok()
+        elif c in (b"E0", b"E1", b"E"):
+            self.echo = c == b"E1"
+            self.ok()
+        elif c in (b"&K0", b"&K3", b"&W0", b"*R1", b"*R0") or c.startswith(b"+CIER=") or c.startswith(b"+SBDAREG="):
+            self.ok()
+        elif c == b"&F0":
+            self.echo = True
+            self.mta = False
+            self.ok()
+        elif c.startswith(b"I"):
+            self.reply(b"IRIDIUM 9600 Family SBD Transceiver (acomm emulator)")
+            self.ok()
+        elif c == b"+CGSN":
+            self.reply(self.imei.encode())
+            self.ok()
+        elif c == b"+CSQ" or c == b"+CSQF":
+            if c == b"+CSQ" and self.csq_ms:
+                self.later(now, self.csq_ms, self._csq)
+            else:
+                self._csq(now)
+        elif c == b"+CRIS":
+            self.reply(b"+CRIS:000,00%d" % (1 if self.ring else 0))
+            self.ok()
+        elif c in (b"+SBDMTA=0", b"+SBDMTA=1"):
+            self.mta = c[-1:] == b"1"
+            self.ok()
+        elif c == b"+SBDMTA?":
+            self.reply(b"+SBDMTA:%d" % (1 if self.mta else 0))
+            self.ok()
+        elif c.startswith(b"+SBDWB="):
+            self._write_binary(now, c[7:])
+        elif c.startswith(b"+SBDWT="):
+            self.mo = text[9:]
+            self.ok()
+        elif c == b"+SBDRB":
+            self._read_binary()
+        elif c == b"+SBDRT":
+            self.reply(b"+SBDRT:")
+            self.reply(self.mt)
+            self.ok()
+        elif c == b"+SBDIX" or c == b"+SBDIXA":
+            self.later(now, self.session_ms, lambda t: self._session_end(t, c))
+        elif c in (b"+SBDD0", b"+SBDD1", b"+SBDD2"):
+            if c != b"+SBDD1":
+                self.mo = None
+            if c != b"+SBDD0":
+                self.mt = b""
+            self.reply(b"0")
+            self.ok()
+        elif c == b"+SBDS":
+            self.reply(b"+SBDS: %d, %d, %d, %d" % (self.mo is not None, self.momsn, bool(self.mt),
+                                                    self.mtmsn if self.mt else -1))
+            self.ok()
+        elif c == b"+SBDTC":
+            self.mt = self.mo or b""
+            self.reply(b"SBDTC: Outbound SBD Copied to Inbound SBD: size = %d" % len(self.mt))
+            self.ok()
+        else:
+            self.error()
+
+    def _csq(self, now):
+        self.reply(b"+CSQ:%d" % self.bars)
+        self.ok()
+
+    def _write_binary(self, now, arg):
+        n = int(arg) if arg.isdigit() and len(arg) <= 5 else -1
+        if not 1 <= n <= self.mo_max:
+            self.reply(b"3")
+            self.ok()
+            return
+        self.reply(b"READY")
+        self.begin_data(now, n + 2, self.wb_timeout_ms, lambda t, d: self._written(d, n))
+
+    def _written(self, data, n):
+        if data is None:
+            self.reply(b"1")  # timed out: no OK follows
+            return
+        if not w.block_ok(data, n):
+            self.reply(b"2")
+        else:
+            self.mo = data[:n]
+            self.reply(b"0")
+        self.ok()
+
+    def _read_binary(self):
+        block = bytearray(w.sbdrb_block(self.mt))
+        if self._fault(("corrupt",), b"SBDRB") is not None:
+            block[-1] ^= 0x55
+        self.raw(block)
+        self.ok()
+
+    def _session_end(self, now, cmd):
+        code = self._fails.pop(0) if self._fails else (32 if self.bars == 0 else 0)
+        sent = None
+        mt_status = 2
+        mt_len = 0
+        queued = 0
+        if code <= w.MO_SUCCESS_MAX:
+            if self.mo is not None:
+                sent = self.mo
+                self.net.mo(now, self, self.mo)
+                self.momsn = (self.momsn + 1) & 0xFFFF
+            self.ring = False
+            data, queued = self.net.take_mt(self.imei)
+            mt_status = 0
+            if data is not None and len(data) > self.mt_max:
+                mt_status = 2  # lost: bigger than the MT buffer
+            elif data is not None:
+                self.mt = data
+                self.mtmsn = (self.mtmsn + 1) & 0xFFFF
+                mt_status = 1
+                mt_len = len(data)
+        self.sessions.append((cmd, code, sent))
+        self.reply(b"+SBDIX: %d, %d, %d, %d, %d, %d" % (code, self.momsn, mt_status, self.mtmsn, mt_len, queued))
+        self.ok()
