@@ -29,6 +29,8 @@ MODEMS = {
     "evologics": ("acomm_sim.evologics", "EvologicsEmulator", 9200),
     "micromodem": ("acomm_sim.micromodem", "MicroModemEmulator", None),
     "benthos": ("acomm_sim.benthos", "BenthosEmulator", None),
+    "iridium": ("acomm_sim.iridium", "IridiumEmulator", None),
+    "gsm": ("acomm_sim.gsm", "GsmEmulator", None),
 }
 
 _CHUNK = 4096
@@ -182,7 +184,7 @@ class Station:
 
 class EmulatorHost:
     def __init__(self, modem, link, address=1, peers=(), options=None, distance=100.0, loss=0.0,
-                 seed=1, time_scale=1.0, tcp_port=None, tcp_host="127.0.0.1"):
+                 seed=1, time_scale=1.0, tcp_port=None, tcp_host="127.0.0.1", incoming=()):
         from acomm_sim.medium import Medium
 
         cls = emulator_class(modem)
@@ -201,6 +203,9 @@ class EmulatorHost:
                 self.stations.append(Station(emu, addr, Pty(path) if path else None))
                 if dist is not None:
                     self.medium.set_distance(address, addr, dist)
+            for data in incoming:
+                # --mt: messages waiting for the first modem (Iridium, GSM)
+                self.stations[0].emu.queue_incoming(now, data)
         except BaseException:
             self.close()
             raise
@@ -279,6 +284,8 @@ def add_arguments(p):
     p.add_argument("--tcp-host", default="127.0.0.1")
     p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
                    help="emulator option, e.g. packet_ms=100 (repeatable)")
+    p.add_argument("--mt", action="append", default=[], metavar="HEX",
+                   help="iridium, gsm: a message (hex bytes) waiting for the modem at the gateway (repeatable)")
 
 
 def main(args):
@@ -289,12 +296,20 @@ def main(args):
             return 2
         k, v = kv.split("=", 1)
         options[k.strip()] = parse_value(v.strip())
+    try:
+        incoming = [bytes.fromhex(h) for h in args.mt]
+    except ValueError:
+        print("--mt wants hex bytes", file=sys.stderr)
+        return 2
+    if incoming and args.modem not in ("iridium", "gsm"):
+        print("--mt is for iridium and gsm", file=sys.stderr)
+        return 2
     tcp = args.tcp
     if tcp == -1:
         tcp = MODEMS[args.modem][2] or 0
     try:
         host = EmulatorHost(args.modem, args.link, args.address, [parse_peer(p) for p in args.peer], options,
-                            args.distance, args.loss, args.seed, args.time_scale, tcp, args.tcp_host)
+                            args.distance, args.loss, args.seed, args.time_scale, tcp, args.tcp_host, incoming)
     except ImportError as e:
         print("the %s emulator is not available: %s" % (args.modem, e), file=sys.stderr)
         return 1

@@ -32,6 +32,21 @@ _STAT_TEXT = (b"REC UNREAD", b"REC READ", b"STO UNSENT", b"STO SENT")
 _PROMPT = b"\r\n> "
 
 
+def default_number(address):
+    # the number an emulated modem has unless it is given one
+    return "+4477009%05d" % address
+
+
+def sms_driver(address, opts):
+    # acomm_sim.world's factory: an SmsDriver that knows every node's
+    # default number (node id = modem address there) unless given numbers
+    from acomm.drivers.sms import SmsDriver
+
+    if "numbers" not in opts:
+        opts["numbers"] = dict((i, default_number(i)) for i in range(255))
+    return SmsDriver(address, **opts)
+
+
 def _bcd2(v):
     return ((v % 10) << 4) | (v // 10)
 
@@ -42,7 +57,7 @@ class GsmEmulator(AtModem):
         AtModem.__init__(self, now, banner, boot_ms, b"\r\n")
         self.net = network_of(medium)
         self.address = address
-        self.number = number or "+4477009%05d" % address
+        self.number = number or default_number(address)
         self.rssi = rssi
         self.capacity = storage
         self.send_ms = send_ms
@@ -65,6 +80,10 @@ class GsmEmulator(AtModem):
 
     def fail_sends(self, code, count=1):
         self._fails.extend([code] * count)
+
+    def queue_incoming(self, now, data, src="+10000000000"):
+        # an SMS with 8-bit data for this modem from outside (a shore phone)
+        self.net.queue_sms(now, self.number, data, src)
 
     def poll(self, now):
         self.net.poll(now)

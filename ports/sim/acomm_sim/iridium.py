@@ -73,6 +73,11 @@ class IridiumEmulator(AtModem):
             else:
                 self._ring_due = True  # when the modem is back in command mode
 
+    def queue_incoming(self, now, data):
+        # an MT message for this modem at the gateway (from a shore
+        # application)
+        self.net.queue_mt(now, self.imei, data)
+
     def poll(self, now):
         self.net.poll(now)
         AtModem.poll(self, now)

@@ -80,6 +80,9 @@ MODEMS = {
     "evologics": (_driver("acomm.drivers.evologics", "EvologicsDriver"), _emulator("acomm_sim.evologics", "EvologicsEmulator")),
     "micromodem": (_driver("acomm.drivers.micromodem", "MicroModemDriver"), _emulator("acomm_sim.micromodem", "MicroModemEmulator")),
     "benthos": (_driver("acomm.drivers.benthos", "BenthosDriver"), _emulator("acomm_sim.benthos", "BenthosEmulator")),
+    # surface links: the emulators share a gateway / SMS centre kept on the channel
+    "iridium": (_driver("acomm.drivers.iridium", "IridiumDriver"), _emulator("acomm_sim.iridium", "IridiumEmulator")),
+    "gsm": (lambda addr, opts: _load("acomm_sim.gsm", "sms_driver")(addr, opts), _emulator("acomm_sim.gsm", "GsmEmulator")),
 }
 
 
