@@ -167,7 +167,7 @@ def test_emulate_command_answers_and_carries_frames(tmp_path, modem):
 
 
 def test_every_modem_is_registered_and_options_parse():
-    assert sorted(MODEMS) == ["benthos", "evologics", "micromodem", "seatrac"]
+    assert sorted(MODEMS) == ["benthos", "evologics", "gsm", "iridium", "micromodem", "seatrac"]
     assert parse_value("100") == 100 and parse_value("0.5") == 0.5 and parse_value("on") is True
     assert parse_value("X150") == "X150"
     assert parse_peer("2") == (2, None, None)
