@@ -362,6 +362,17 @@ class TcpStream:
             return
         del self._pending[:n]
 
+    @property
+    def pending(self):
+        # bytes written and not yet taken by the OS
+        return len(self._pending)
+
+    def drop(self):
+        # Closes the current connection as if it were lost (the peer sent
+        # what cannot be ours): reconnects after the back-off.
+        if self.sock is not None:
+            self._lost()
+
     def close(self):
         self._closed = True
         if self.sock is not None:
