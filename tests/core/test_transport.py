@@ -118,3 +118,25 @@ def test_indexes_travel_mod_256_and_unwrap_near_the_base():
     i, head, data = o.repoll()  # a bare poll: the index byte and nothing else
     s = sg.decode(head, data)
     assert s.poll and s.payload == b"" and data == bytes((i & 0xFF,))
+
+
+def test_reassembly_takes_fragments_in_any_order_and_twice():
+    rng = Prng(12)
+    blob = sg.packet_header(5, 1000) + rng.bytes(1000)
+    o = Outgoing(blob, 40, 0, 1, 5)
+    o.new_round()
+    frags = []
+    while True:
+        nf = o.next_fragment()
+        if nf is None:
+            break
+        frags.append(nf)
+    order = frags + frags[3:9]  # some twice
+    for i in range(len(order) - 1, 0, -1):  # shuffled
+        j = rng.below(i + 1)
+        order[i], order[j] = order[j], order[i]
+    r = Reassembly(1, 5000, 0)
+    for _, head, data in order:
+        s = sg.decode(head, data)
+        r.add(r.index_of(s.index), s.payload, 0)
+    assert r.complete() and r.blob() == blob and r.count == len(frags)
