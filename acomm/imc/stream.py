@@ -70,23 +70,21 @@ class StreamParser:
             self._scan(out)
         return out
 
-    def _find_sync(self, s, n):
-        buf = self._buf
-        a = buf.find(SYNC_LE, s, n)
-        b = buf.find(SYNC_BE, s, n)
-        if a < 0:
-            return b
-        if b < 0 or a < b:
-            return a
-        return b
-
     def _scan(self, out):
         buf = self._buf
         mv = self._mv
         n = self._n
         s = 0
+        # next sync of each order at or after s; -1: none before n. Kept
+        # between candidates so garbage full of one order's syncs does not
+        # make every step scan to the end for the other.
+        a = b = -2
         while n - s >= 2:
-            j = self._find_sync(s, n)
+            if a != -1 and a < s:
+                a = buf.find(SYNC_LE, s, n)
+            if b != -1 and b < s:
+                b = buf.find(SYNC_BE, s, n)
+            j = b if a < 0 or (0 <= b < a) else a
             if j < 0:
                 # keep a last byte that may be the first half of a sync
                 j = n - 1 if buf[n - 1] in (0x54, 0xFE) else n

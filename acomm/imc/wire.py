@@ -115,9 +115,7 @@ class Writer:
         self.out += struct.pack(_FMT[self.big][_U64], fp64.bits_of(v))
 
     def raw(self, b):
-        if isinstance(b, str):
-            b = b.encode()
-        elif not isinstance(b, (bytes, bytearray, memoryview)):
+        if not isinstance(b, (bytes, bytearray, memoryview)):
             raise EncodeError("%r is not bytes" % (type(b).__name__,))
         if len(b) > MAX_PAYLOAD:
             raise EncodeError("%d bytes, at most %d" % (len(b), MAX_PAYLOAD))
