@@ -21,6 +21,11 @@ def main(argv=None):
 
     emulate.add_arguments(e)
 
+    n = sub.add_parser("node", help="a node on UDP and/or TCP links; prints events, sends stdin lines 'DST TEXT'")
+    from . import ipnode
+
+    ipnode.add_arguments(n)
+
     args = p.parse_args(argv)
     if args.cmd == "bench":
         from . import bench
@@ -30,6 +35,8 @@ def main(argv=None):
         return demo.main(args)
     if args.cmd == "emulate":
         return emulate.main(args)
+    if args.cmd == "node":
+        return ipnode.main(args)
     p.print_help()
     return 2
 

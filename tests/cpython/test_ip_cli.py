@@ -1,0 +1,46 @@
+# `acomm node` as two child processes on loopback TCP: the server prints
+# where it listens, the client connects, waits until the server is heard,
+# sends, and the server prints what it received.
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def _node(*args):
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([ROOT, os.path.join(ROOT, "ports", "cpython"), os.path.join(ROOT, "ports", "sim")])
+    cmd = [sys.executable, "-m", "acomm_cpython.cli", "node"] + list(args)
+    return subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True)
+
+
+def test_node_command_over_tcp():
+    srv = _node("--name", "topside", "--id", "1", "--tcp-listen", "127.0.0.1:0", "--seconds", "4")
+    cli = None
+    try:
+        banner = srv.stdout.readline()
+        assert banner.startswith("tcp listening on 127.0.0.1:"), (banner, srv.stderr.read())
+        port = banner.strip().rsplit(":", 1)[1]
+        t0 = time.monotonic()
+        cli = _node("--name", "buoy", "--id", "2", "--known", "topside=1", "--tcp-connect", "127.0.0.1:" + port,
+                    "--send", "topside=hello over tcp", "--seconds", "1.5")
+        out, err = cli.communicate(timeout=10)
+        assert cli.returncode == 0, err
+        assert "available topside on tcp" in out and "status tcp 1 delivered" in out, out
+        srv.terminate()
+        sout, serr = srv.communicate(timeout=10)
+        assert "received tcp node-2 -> topside: hello over tcp" in sout, (sout, serr)
+        assert time.monotonic() - t0 < 8
+    finally:
+        for p in (srv, cli):
+            if p is not None and p.poll() is None:
+                p.kill()
+                p.wait()
+
+
+def test_node_command_needs_a_link():
+    p = _node("--name", "x", "--id", "1")
+    _, err = p.communicate(timeout=10)
+    assert p.returncode == 2 and "--udp" in err
