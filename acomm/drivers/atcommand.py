@@ -19,9 +19,10 @@
 #   sink.on_echo()                 our own command line came back
 #   sink.on_stray(line)            any other line outside a command
 #   sink._out                      the bytearray commands are written to
-# Lines are bytes without their line end and trailing spaces. A line with a
-# control or non-ASCII character is noise: it is dropped and counted (junk),
-# which is how the channel resynchronises after garbage. After a timeout the
+# Lines are bytes without their line end and trailing spaces. A control or
+# non-ASCII character is noise: the line so far is dropped and counted
+# (junk), and the line goes on after it, which is how the channel
+# resynchronises after garbage (even "\x00\x00OK" is still an OK). After a timeout the
 # channel stays quiet for settle_ms and drops what arrives then, so that a
 # late answer is not taken for the answer to the next command.
 # Buffers are preallocated; nothing is allocated per byte.
@@ -67,6 +68,7 @@ class AtChannel:
         self._mode = _LINES
         self._n = 0
         self._over = False
+        self._noisy = False
         self._need = 0
         self._got = 0
         self._quiet_until = None
@@ -158,6 +160,9 @@ class AtChannel:
             if b == 13 or b == 10:
                 n = self._n
                 self._n = 0
+                if self._noisy:
+                    self._noisy = False
+                    self._junk("noise")
                 if self._over:
                     self._over = False
                     self._junk("overlong")
@@ -165,6 +170,12 @@ class AtChannel:
                     self._line_done(n)
                 if self._mode == _B_TEXT and self.tag:
                     self._mode = _B_WAIT
+                continue
+            if b < 32 or b > 126:
+                # noise: what came before it on this line is dropped, so an
+                # answer after garbage on the same line is still read
+                self._noisy = True
+                self._n = 0
                 continue
             n = self._n
             if n < cap:
@@ -184,11 +195,6 @@ class AtChannel:
         buf = self._line
         while n and buf[n - 1] == 32:
             n -= 1
-        for i in range(n):
-            c = buf[i]
-            if c < 32 or c > 126:
-                self._junk("noise")
-                return
         if not n:
             return
         s = bytes(buf[:n])

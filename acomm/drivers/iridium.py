@@ -307,7 +307,11 @@ class IridiumDriver(AtDriver):
             self._fail("SBDWB status 3: bad message size")
             return
         elif code == R_TIMEOUT:
-            why = "SBDWB: no reply"
+            # a silent modem: written again when it answers (down_after
+            # silences restart it); give_up_ms bounds the wait
+            self.last_failure = "SBDWB: no reply"
+            s.state = QUEUED
+            return
         else:
             why = "SBDWB: %s" % (line.decode() if code != R_OK else "no status")
         self.last_failure = why

@@ -44,7 +44,8 @@ class IridiumEmulator(AtModem):
         self.csq_ms = csq_ms
         self.momsn = 0
         self.mtmsn = 0
-        self.sessions = []  # (command, MO status, MO bytes or None), for tests
+        self.mt_too_big = 0  # MT messages lost: longer than mt_max
+        self.sessions = []  # (end, command, MO status, MO bytes or None), for tests
         self._fails = []
         self._reset()
         self.net.attach(self)
@@ -200,11 +201,12 @@ class IridiumEmulator(AtModem):
             mt_status = 0
             if data is not None and len(data) > self.mt_max:
                 mt_status = 2  # lost: bigger than the MT buffer
+                self.mt_too_big += 1
             elif data is not None:
                 self.mt = data
                 self.mtmsn = (self.mtmsn + 1) & 0xFFFF
                 mt_status = 1
                 mt_len = len(data)
-        self.sessions.append((cmd, code, sent))
+        self.sessions.append((now, cmd, code, sent))
         self.reply(b"+SBDIX: %d, %d, %d, %d, %d, %d" % (code, self.momsn, mt_status, self.mtmsn, mt_len, queued))
         self.ok()
