@@ -292,9 +292,10 @@ class DatagramDriver(SansIO):
             self._events.append((EV_TX_FAILED, fl[0], "the port did not send the frame"))
         if self.node_id is None:
             return
-        if self._announce_now or (
-            self.announce_ms > 0 and (self._last_bcast is None or ticks_diff(now, self._last_bcast) >= self.announce_ms)
-        ):
+        if self._last_bcast is None:
+            # the clock starts now: the link adverts at once by itself
+            self._last_bcast = now
+        if self._announce_now or (self.announce_ms > 0 and ticks_diff(now, self._last_bcast) >= self.announce_ms):
             self._announce(now)
 
     def _announce(self, now):

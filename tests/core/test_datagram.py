@@ -158,20 +158,22 @@ def test_send_refuses_what_is_not_a_raw_frame():
 def test_announcements_top_up_adverts():
     d = DatagramDriver(node_id=4, broadcast=[GROUP], announce_ms=1000)
     d.poll(0)
+    assert d.take_datagrams() == []  # at start the link's own advert goes
+    d.poll(1000)
     out = d.take_datagrams()
     assert len(out) == 1 and out[0][0] is None and out[0][1] == GROUP
     f = fr.decode_raw(out[0][2])
     assert f.ftype == fr.ADVERT and f.src == 4 and f.dst == fr.BROADCAST
     assert decode_advert(f.payload) == (4, 4000)  # adverts count periods in 4 s
-    d.sent(0, None)
-    d.poll(999)
+    d.sent(1000, None)
+    d.poll(1999)
     assert d.take_datagrams() == []
-    h = d.send(900, None, raw(4, fr.BROADCAST))  # the link's own broadcast
+    h = d.send(1900, None, raw(4, fr.BROADCAST))  # the link's own broadcast
     d.take_datagrams()
-    d.sent(900, h)
-    d.poll(1500)
+    d.sent(1900, h)
+    d.poll(2500)
     assert d.take_datagrams() == []  # heard 600 ms ago: no need
-    d.poll(1900)
+    d.poll(2900)
     assert len(d.take_datagrams()) == 1 and d.stats["announcements"] == 2
     # without a node id the driver cannot speak for the node
     d = DatagramDriver(broadcast=[GROUP], announce_ms=1000)
