@@ -11,18 +11,15 @@
 import os
 import random
 import shutil
-import signal
-import subprocess
 import sys
-import time
 
 from acomm.packetstore import PacketStore
 from acomm.store import Store
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 
+from killer import kill_at_random  # noqa: E402
 from packet_crash_writer import CAPACITY, MAX_RECORD, body  # noqa: E402
 
 RUNS = 200
@@ -47,26 +44,11 @@ def _recover(path):
 def test_packets_survive_kills(tmp_path):
     rng = random.Random(20261122)
     path = str(tmp_path / "store")
-    env = dict(os.environ)
-    env["PYTHONPATH"] = ROOT + os.pathsep + HERE + os.pathsep + env.get("PYTHONPATH", "")
     live = set()
     used = 0
     acked = cut = multi = 0
     for run in range(RUNS):
-        p = subprocess.Popen(
-            [sys.executable, os.path.join(HERE, "packet_crash_writer.py"), path, str(run)]
-            + (["piecewise"] if run & 1 else []),
-            stdout=subprocess.PIPE,
-            env=env,
-        )
-        try:
-            assert p.stdout.readline() == b"R\n"
-            time.sleep(rng.uniform(0.0, 0.03))
-        finally:
-            p.send_signal(signal.SIGKILL)
-            p.wait()
-        lines = p.stdout.read().decode().split("\n")[:-1]
-        p.stdout.close()
+        lines = kill_at_random("packet_crash_writer.py", path, run, rng)
         pending = None
         for line in lines:
             f = line.split()

@@ -12,17 +12,15 @@
 import os
 import random
 import shutil
-import signal
-import subprocess
 import sys
 import time
 
 from acomm.store import Store
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 
+from killer import kill_at_random  # noqa: E402
 from store_crash_writer import CAPACITY, MAX_RECORD, data  # noqa: E402
 
 RUNS = 200
@@ -82,27 +80,11 @@ def _check(path, model, pending):
 def test_store_survives_kills(tmp_path):
     rng = random.Random(20240607)
     path = str(tmp_path / "store")
-    env = dict(os.environ)
-    env["PYTHONPATH"] = ROOT + os.pathsep + env.get("PYTHONPATH", "")
     model = {}
     torn = cut_puts = cut_compactions = tmp_left = acked = 0
     t0 = time.monotonic()
     for run in range(RUNS):
-        p = subprocess.Popen(
-            [sys.executable, os.path.join(HERE, "store_crash_writer.py"), path, str(run)]
-            + (["piecewise"] if run & 1 else []),
-            stdout=subprocess.PIPE,
-            env=env,
-        )
-        try:
-            assert p.stdout.readline() == b"R\n"
-            time.sleep(rng.uniform(0.0, 0.03))
-        finally:
-            p.send_signal(signal.SIGKILL)
-            p.wait()
-        out = p.stdout.read().decode()
-        p.stdout.close()
-        lines = out.split("\n")[:-1]  # the last piece may be half a line
+        lines = kill_at_random("store_crash_writer.py", path, run, rng)
         acked += sum(1 for line in lines if line[:2] in ("EP", "ED"))
         pending = _parse(lines, model)
         if pending is not None:
