@@ -19,7 +19,7 @@
 #   sink.on_echo()                 our own command line came back
 #   sink.on_stray(line)            any other line outside a command
 #   sink._out                      the bytearray commands are written to
-# Lines are bytes without their line end and trailing spaces. A control or
+# Lines are bytes without their line end and outer spaces. A control or
 # non-ASCII character is noise: the line so far is dropped and counted
 # (junk), and the line goes on after it, which is how the channel
 # resynchronises after garbage (even "\x00\x00OK" is still an OK). After a timeout the
@@ -195,9 +195,12 @@ class AtChannel:
         buf = self._line
         while n and buf[n - 1] == 32:
             n -= 1
-        if not n:
+        i = 0
+        while i < n and buf[i] == 32:
+            i += 1  # the space after an SMS prompt, for one
+        if i == n:
             return
-        s = bytes(buf[:n])
+        s = bytes(buf[i:n])
         sink = self.sink
         tag = self.tag
         if tag and s == self._text:

@@ -182,6 +182,8 @@ class AtDriver(SlotDriver):
             self.lost(now, "modem not answering")
 
     def on_info(self, tag, line):
+        if self._banner(line):
+            return
         if line.startswith(b"+CSQ"):
             v = self._parse_signal(line)
             if v is None:
@@ -215,13 +217,19 @@ class AtDriver(SlotDriver):
             self.lost(self._now, "modem restarted (its echo is back)")
 
     def on_stray(self, line):
+        if not self._banner(line):
+            self.stats["unexpected"] += 1
+
+    def _banner(self, line):
+        # a power-up line, even in the middle of a command: the modem
+        # restarted (True)
         for m in self.banner_marks:
             if line.startswith(m):
                 self.stats["reboots"] += 1
                 if self._state != S_START:
                     self.lost(self._now, "modem rebooted")
-                return
-        self.stats["unexpected"] += 1
+                return True
+        return False
 
     # -- restarts ------------------------------------------------------------------------
     def lost(self, now, reason):

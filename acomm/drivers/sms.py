@@ -228,12 +228,14 @@ class SmsDriver(AtDriver):
         elif tag == T_CMGR:
             if code == R_TIMEOUT and self._retry():
                 return
-            i = self._read.pop(0)
-            self._tries = 0
             if code == R_OK and self._hdr is not None:
-                self._deliver()
+                if not self._deliver() and self._retry():
+                    return  # damaged on the serial line, perhaps: read it again
+                i = self._read[0]
                 if i not in self._delete:
                     self._delete.append(i)
+            self._read.pop(0)
+            self._tries = 0
         elif tag == T_CMGD:
             if code == R_TIMEOUT and self._retry():
                 return
@@ -270,8 +272,8 @@ class SmsDriver(AtDriver):
         self._events.append((EV_TX_FAILED, s.handle, why))
 
     def _deliver(self):
-        # the message just read: to the link when it is a frame from a node
-        # we know
+        # The message just read: to the link when it is a frame from a node
+        # we know. False when it could not be decoded.
         st = self.stats
         try:
             if self.pdu_mode:
@@ -284,7 +286,7 @@ class SmsDriver(AtDriver):
                 number, dcs, data, _, hdr = pdu.decode_deliver(raw)
                 if pdu.alphabet(dcs) != 1 or hdr is not None:
                     st["rx_not_binary"] += 1
-                    return
+                    return True
             else:
                 number = w.cmgr_sender(self._hdr)
                 if number is None:
@@ -292,16 +294,17 @@ class SmsDriver(AtDriver):
                 data = w.decode_text(self._body or b"")
         except DecodeError:
             st["rx_bad"] += 1
-            return
+            return False
         src = self.node_of(number)
         if src is None:
             st["rx_unknown_sender"] += 1
-            return
+            return True
         if not data:
             st["rx_bad"] += 1
-            return
+            return False
         st["received"] += 1
         self._events.append((EV_RX, src, self.address, data))
+        return True
 
     def _want(self, i):
         # one more stored message to read; when too many wait, the next
