@@ -3,9 +3,10 @@
 # answering, restarts, or has no signal), the periodic signal poll that also
 # serves as keepalive, and the one-request slot (acomm.drivers.slotbase).
 # The subclass gives the command list, the work it does when the modem is
-# up (_work), what its commands' answers mean (_result, _info), its URCs
-# (_urc), how it reads the signal (_signal_ok) and what a restart does to
-# its request (_lost).
+# up (_work), what its commands' answers mean (_result, _info, _prompt,
+# _block), its URCs (_urc), its timers (_tick), how it reads the signal
+# (parse_signal, raising DecodeError, and _signal_ok) and what a restart
+# does to its request (_lost).
 #
 # Start-up: each step is (command, wanted info prefix or None, timeout or
 # None). A step that fails (ERROR, timeout, missing info) starts the list
@@ -21,6 +22,7 @@
 # comes back.
 
 from ..compat import const, ticks_add, ticks_diff
+from ..errors import DecodeError
 from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP
 from .atcommand import R_OK, R_TIMEOUT, AtChannel
 from .slotbase import IDLE, S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
@@ -106,6 +108,9 @@ class AtDriver(SlotDriver):
         if self._csq_at is None or ticks_diff(now, self._csq_at) >= 0:
             self.poll_signal(now)
 
+    def _tick(self, now):
+        pass
+
     def poll_signal(self, now):
         self._csq_at = ticks_add(now, self.csq_period_ms if self.signal_ok else self.csq_retry_ms)
         self.at.command(now, b"AT+CSQ", T_CSQ, self.csq_timeout_ms)
@@ -185,12 +190,13 @@ class AtDriver(SlotDriver):
         if self._banner(line):
             return
         if line.startswith(b"+CSQ"):
-            v = self._parse_signal(line)
-            if v is None:
+            try:
+                v = self.parse_signal(line)
+            except DecodeError:
                 self.stats["unexpected"] += 1
-            else:
-                self.set_signal(self._now, v)
-                self._step_seen = True
+                return
+            self.set_signal(self._now, v)
+            self._step_seen = True
             return
         if tag == T_CONFIG:
             want = self.steps[self._step][1]

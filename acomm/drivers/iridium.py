@@ -160,14 +160,11 @@ class IridiumDriver(AtDriver):
         self._wb_fails = 0
         return self._accept(now, K_MO, addr, data)
 
+    parse_signal = staticmethod(w.parse_csq)
+
     def _signal_ok(self, bars):
         return bars >= self.min_bars
 
-    def _parse_signal(self, line):
-        try:
-            return w.parse_csq(line)
-        except DecodeError:
-            return None
 
     # -- what to do next -------------------------------------------------------------
     def _tick(self, now):

@@ -143,19 +143,12 @@ class SmsDriver(AtDriver):
             raise EncodeError("an SMS carries 1..%d bytes, not %d" % (self.caps.mtu_tx, n))
         return self._accept(now, K_SMS, addr, data)
 
+    parse_signal = staticmethod(w.parse_csq)
+
     def _signal_ok(self, rssi):
         return rssi != 99 and rssi >= self.min_rssi
 
-    def _parse_signal(self, line):
-        try:
-            return w.parse_csq(line)
-        except DecodeError:
-            return None
-
     # -- what to do next -------------------------------------------------------------
-    def _tick(self, now):
-        pass
-
     def _work(self, now):
         at = self.at
         s = self.slot

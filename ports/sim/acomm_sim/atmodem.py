@@ -10,9 +10,12 @@
 # reboot(now): deaf for boot_ms, settings back to their power-up values,
 # then the banner lines.
 #
-# The subclass gives _command(now, text) (text as typed, "AT" included),
-# _reset() (power-up state) and, for the data phase it opens, the function
-# to call with the bytes (or None when the phase timed out or was aborted).
+# The subclass gives _command(now, text, c) (text as typed; c: what follows
+# "AT", in capitals; "AT" and "ATE0/1" are answered here), _reset()
+# (power-up state), self.net (its network, polled with it) and, for the
+# data phase it opens, the function to call with the bytes (or None when
+# the phase timed out or was aborted). shared_network() gives every modem
+# on one medium the same network.
 
 from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers.base import SansIO
@@ -69,6 +72,7 @@ class AtModem(SansIO, FaultModes):
 
     def poll(self, now):
         self._now = now
+        self.net.poll(now)
         if self._still_booting(now):
             return
         if self._data is not None and ticks_diff(now, self._data_until) >= 0:
@@ -83,7 +87,7 @@ class AtModem(SansIO, FaultModes):
             self._mute = False
 
     def idle(self, now):
-        return self._data is None and self._later is None and self._booting_until is None
+        return self._data is None and self._later is None and self._booting_until is None and not self.net.busy()
 
     def _end_line(self, now):
         text = bytes(self._line)
@@ -111,7 +115,14 @@ class AtModem(SansIO, FaultModes):
             if not f[3]:
                 return
             self._mute = True
-        self._command(now, text)
+        c = text[2:].upper()
+        if c == b"":
+            self.ok()
+        elif c in (b"E0", b"E1", b"E"):
+            self.echo = c == b"E1"
+            self.ok()
+        else:
+            self._command(now, text, c)
         if self._later is not None:
             self._later[2] = self._mute
         self._mute = False
@@ -189,3 +200,16 @@ class AtModem(SansIO, FaultModes):
 
     def _booted(self, now):
         self._print_banner()
+
+
+def shared_network(medium, cls, attr):
+    # The network of a medium: medium itself when it is one, else one made
+    # on first use and kept on the medium (the acoustic medium of a World or
+    # of `acomm emulate`) under attr.
+    if isinstance(medium, cls):
+        return medium
+    net = getattr(medium, attr, None)
+    if net is None:
+        net = cls()
+        setattr(medium, attr, net)
+    return net

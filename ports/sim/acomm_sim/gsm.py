@@ -85,13 +85,6 @@ class GsmEmulator(AtModem):
         # an SMS with 8-bit data for this modem from outside (a shore phone)
         self.net.queue_sms(now, self.number, data, src)
 
-    def poll(self, now):
-        self.net.poll(now)
-        AtModem.poll(self, now)
-
-    def idle(self, now):
-        return AtModem.idle(self, now) and not self.net.busy()
-
     # -- the network -------------------------------------------------------------------------
     def store(self, now, number, dcs, data):
         # a message arrives; False when it cannot be taken now
@@ -107,14 +100,8 @@ class GsmEmulator(AtModem):
         return False
 
     # -- commands --------------------------------------------------------------------------------
-    def _command(self, now, text):
-        c = text[2:].upper()
-        if c == b"":
-            self.ok()
-        elif c in (b"E0", b"E1", b"E"):
-            self.echo = c == b"E1"
-            self.ok()
-        elif c.startswith(b"I"):
+    def _command(self, now, text, c):
+        if c.startswith(b"I"):
             self.reply(b"acomm GSM modem emulator")
             self.ok()
         elif c == b"+CGSN":

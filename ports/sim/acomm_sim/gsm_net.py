@@ -14,6 +14,8 @@
 
 from acomm.compat import ticks_add, ticks_diff
 
+from .atmodem import shared_network
+
 _LOG_MAX = 100
 
 
@@ -70,10 +72,4 @@ class GsmNetwork:
 
 
 def network_of(medium):
-    if isinstance(medium, GsmNetwork):
-        return medium
-    net = getattr(medium, "gsm_network", None)
-    if net is None:
-        net = GsmNetwork()
-        medium.gsm_network = net
-    return net
+    return shared_network(medium, GsmNetwork, "gsm_network")

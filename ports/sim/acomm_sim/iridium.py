@@ -80,24 +80,14 @@ class IridiumEmulator(AtModem):
         self.net.queue_mt(now, self.imei, data)
 
     def poll(self, now):
-        self.net.poll(now)
         AtModem.poll(self, now)
         if self._ring_due and self._later is None and self._data is None and self._booting_until is None:
             self._ring_due = False
             self.notify(b"SBDRING")
 
-    def idle(self, now):
-        return AtModem.idle(self, now) and not self.net.busy()
-
     # -- commands ----------------------------------------------------------------------------------
-    def _command(self, now, text):
-        c = text[2:].upper()
-        if c == b"":
-            self.ok()
-        elif c in (b"E0", b"E1", b"E"):
-            self.echo = c == b"E1"
-            self.ok()
-        elif c in (b"&K0", b"&K3", b"&W0", b"*R1", b"*R0") or c.startswith(b"+CIER=") or c.startswith(b"+SBDAREG="):
+    def _command(self, now, text, c):
+        if c in (b"&K0", b"&K3", b"&W0", b"*R1", b"*R0") or c.startswith(b"+CIER=") or c.startswith(b"+SBDAREG="):
             self.ok()
         elif c == b"&F0":
             self.echo = True

@@ -21,6 +21,8 @@
 
 from acomm.compat import ticks_add, ticks_diff
 
+from .atmodem import shared_network
+
 _LOG_MAX = 100
 
 
@@ -122,10 +124,4 @@ class IridiumNetwork:
 
 
 def network_of(medium):
-    if isinstance(medium, IridiumNetwork):
-        return medium
-    net = getattr(medium, "iridium_network", None)
-    if net is None:
-        net = IridiumNetwork()
-        medium.iridium_network = net
-    return net
+    return shared_network(medium, IridiumNetwork, "iridium_network")
