@@ -111,6 +111,14 @@ class AtDriver(SlotDriver):
     def _tick(self, now):
         pass
 
+    def stuck_reason(self):
+        # why a request is still waiting for the modem
+        if self._state != S_UP:
+            return "modem not answering"
+        if not self.signal_ok:
+            return "no signal"
+        return None
+
     def poll_signal(self, now):
         self._csq_at = ticks_add(now, self.csq_period_ms if self.signal_ok else self.csq_retry_ms)
         self.at.command(now, b"AT+CSQ", T_CSQ, self.csq_timeout_ms)

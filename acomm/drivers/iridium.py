@@ -35,7 +35,7 @@ from ..events import EV_RX, EV_TX_DONE, EV_TX_FAILED
 from . import iridium_wire as w
 from .atcommand import R_END, R_OK, R_TIMEOUT
 from .atdriver import AtDriver
-from .slotbase import IDLE, QUEUED, S_UP
+from .slotbase import IDLE, QUEUED
 
 # slot states after slotbase's IDLE and QUEUED
 WRITING = const(2)
@@ -170,12 +170,7 @@ class IridiumDriver(AtDriver):
     def _tick(self, now):
         s = self.slot
         if (s.state == QUEUED or s.state == LOADED) and ticks_diff(now, self._first_at) >= self.give_up_ms:
-            if self._state != S_UP:
-                why = "modem not answering"
-            elif not self.signal_ok:
-                why = "no signal"
-            else:
-                why = self.last_failure or "no session"
+            why = self.stuck_reason() or self.last_failure or "no session"
             self._fail("%s (gave up after %d sessions)" % (why, self._sessions))
 
     def _work(self, now):

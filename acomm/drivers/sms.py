@@ -60,6 +60,7 @@ class SmsDriver(AtDriver):
         cmd_timeout_ms=5000,
         prompt_timeout_ms=5000,
         send_timeout_ms=60000,
+        give_up_ms=600000,
         csq_timeout_ms=5000,
         csq_period_ms=60000,
         csq_retry_ms=20000,
@@ -88,6 +89,7 @@ class SmsDriver(AtDriver):
         self.list_period_ms = list_period_ms
         self.prompt_timeout_ms = prompt_timeout_ms
         self.send_timeout_ms = send_timeout_ms
+        self.give_up_ms = give_up_ms
         self.read_capacity = read_capacity
         self.numbers = {}
         self._ids = {}  # digits -> node id
@@ -113,6 +115,7 @@ class SmsDriver(AtDriver):
         self._read = []  # storage indices to read, oldest first
         self._delete = []  # indices read, to delete
         self._tries = 0
+        self._first_at = 0  # when the message in the slot was accepted
         self._list_at = None  # None: list at once
         self._prompted = False
         self._mr = None
@@ -141,6 +144,7 @@ class SmsDriver(AtDriver):
         n = len(data)
         if not 1 <= n <= self.caps.mtu_tx:
             raise EncodeError("an SMS carries 1..%d bytes, not %d" % (self.caps.mtu_tx, n))
+        self._first_at = now
         return self._accept(now, K_SMS, addr, data)
 
     parse_signal = staticmethod(w.parse_csq)
@@ -149,6 +153,14 @@ class SmsDriver(AtDriver):
         return rssi != 99 and rssi >= self.min_rssi
 
     # -- what to do next -------------------------------------------------------------
+    def _tick(self, now):
+        # a message that cannot leave (no signal, no modem) fails in time
+        s = self.slot
+        if s.state == QUEUED and ticks_diff(now, self._first_at) >= self.give_up_ms:
+            s.state = IDLE
+            self.stats["send_failed"] += 1
+            self._events.append((EV_TX_FAILED, s.handle, self.stuck_reason() or "not sent in time"))
+
     def _work(self, now):
         at = self.at
         s = self.slot

@@ -152,6 +152,17 @@ def test_refusals_errors_and_a_missing_prompt():
     assert f.answer(b"\r\n+CMGR: 0,,20\r\n0791ZZ\r\n\r\nOK\r\n") == b"AT+CMGR=4\r"
     assert f.answer(b"\r\n+CMGR: 0,,20\r\n07914477\r\n\r\nOK\r\n") == b"AT+CMGD=4\r"
     assert d.stats["rx_bad"] == 2 and [e for e in f.take() if e[0] == EV_RX] == []
+    f.answer(b"\r\nOK\r\n")
+    # taken while the signal poll was out, which then says "no signal": the
+    # message waits, and fails once give_up_ms have passed
+    assert f.poll(60000) == b"AT+CSQ\r"
+    h = d.send(f.t, 2, b"z")
+    assert f.answer(b"\r\n+CSQ: 99,99\r\n\r\nOK\r\n") == b""
+    assert f.take() == [(EV_DRIVER_DOWN, "no signal")]
+    f.poll(599000)
+    assert f.take() == []
+    f.poll(1000)
+    assert (EV_TX_FAILED, h, "no signal") in f.take()
 
 
 # -- against the emulator -------------------------------------------------------------------
