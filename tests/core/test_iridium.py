@@ -378,3 +378,46 @@ def test_transport_carries_a_packet_over_iridium_in_link_sized_fragments():
     mo = [len(m[2]) for m in w.channel.iridium_network.mo_log if m[1] == ends[0].emu.imei]
     assert len(mo) >= 4 and max(mo) == 270, mo
     assert ends[1].emu.mt_too_big == 0
+
+
+def test_soak_with_faults_every_request_ends_once():
+    # requests both ways through the gateway while the emulators damage,
+    # cut and swallow lines, fail sessions, lose signal, make noise and
+    # restart: every request ends exactly once and nothing stays behind
+    from acomm.prng import Prng
+
+    net = iridium_net()
+    rng = Prng(11)
+    ids = {"buoy": [], "diver": []}
+    faults = ("corrupt_next", "truncate_next", "swallow_next")
+    for i in range(16):
+        src = "buoy" if rng.chance(0.5) else "diver"
+        dst = "diver" if src == "buoy" else "buoy"
+        ids[src].append(net.send(src, dst, b"soak %d" % i, ack=rng.chance(0.6), life=rng.range(60, 400)))
+        emu = net.emus["buoy" if rng.chance(0.5) else "diver"]
+        k = rng.below(6)
+        if k < 3:
+            getattr(emu, faults[k])(None)
+        elif k == 3:
+            emu.fail_sessions((32, 18, 11)[rng.below(3)], rng.range(1, 3))
+        elif k == 4:
+            emu.inject_noise(rng.bytes(rng.range(1, 40)))
+        if i == 9:
+            net.emus["diver"].reboot(net.clk())
+        if i == 5:
+            net.emus["buoy"].set_bars(0)
+        if i == 7:
+            net.emus["buoy"].set_bars(4)
+        net.run(20000, step=50)
+    links = [net.nodes[n].links["acoustic"] for n in ids]
+    assert net.run(900000, step=50, until=lambda: all(not ln._active for ln in links))
+    finals = {}
+    for name in ids:
+        rec = net.rec(name)
+        check_exactly_one_final(rec, ids[name])
+        for rid in ids[name]:
+            finals[rec.final(rid)] = finals.get(rec.final(rid), 0) + 1
+    assert finals.get(DELIVERED) and sum(finals.values()) == 16, finals
+    # both modems are usable again, and both drivers saw the trouble
+    assert net.run(60000, step=50, until=lambda: all(d.ready(net.clk()) for d in net.drivers.values()))
+    assert net.drivers["diver"].stats["reboots"] >= 1 and net.drivers["buoy"].stats["sessions_failed"] >= 1
