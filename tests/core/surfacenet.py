@@ -3,7 +3,10 @@
 # one shared network (gateway or SMS centre), without a Link, so a test sees
 # every driver event and every byte. Runs on CPython and MicroPython.
 from acomm.clock import ManualClock
+from acomm.events import DELIVERED
 from acomm.fakeuart import uart_pair
+from acomm.prng import Prng
+from linkcheck import check_exactly_one_final
 
 
 class Rig:
@@ -89,3 +92,41 @@ class Fed:
         ev = self.events
         self.events = []
         return ev
+
+
+def soak(net, seed, rounds, gap_ms, life, payload, modem_fault, events):
+    # On a started modemnet.Net of two nodes: `rounds` requests either way,
+    # most acknowledged, while the emulators damage, cut and swallow lines
+    # and make noise, plus modem_fault(rng, emu) (the modem's own faults)
+    # and events[i](net) after round i (a restart, a lost signal). Checks
+    # that every request ends exactly once, that nothing stays behind and
+    # that both modems are usable after; returns the finals' counts.
+    rng = Prng(seed)
+    ids = {"buoy": [], "diver": []}
+    faults = ("corrupt_next", "truncate_next", "swallow_next")
+    for i in range(rounds):
+        src = "buoy" if rng.chance(0.5) else "diver"
+        dst = "diver" if src == "buoy" else "buoy"
+        ids[src].append(net.send(src, dst, payload(rng, i), ack=rng.chance(0.6), life=rng.range(life[0], life[1])))
+        emu = net.emus["buoy" if rng.chance(0.5) else "diver"]
+        k = rng.below(6)
+        if k < 3:
+            getattr(emu, faults[k])(None)
+        elif k == 3:
+            modem_fault(rng, emu)
+        elif k == 4:
+            emu.inject_noise(rng.bytes(rng.range(1, 40)))
+        if i in events:
+            events[i](net)
+        net.run(gap_ms, step=50)
+    links = [net.nodes[n].links["acoustic"] for n in ids]
+    assert net.run(900000, step=50, until=lambda: all(not ln._active for ln in links))
+    finals = {}
+    for name in ids:
+        rec = net.rec(name)
+        check_exactly_one_final(rec, ids[name])
+        for rid in ids[name]:
+            finals[rec.final(rid)] = finals.get(rec.final(rid), 0) + 1
+    assert finals.get(DELIVERED) and sum(finals.values()) == rounds, finals
+    assert net.run(60000, step=50, until=lambda: all(d.ready(net.clk()) for d in net.drivers.values()))
+    return finals

@@ -23,7 +23,7 @@ from acomm_sim.iridium_net import IridiumNetwork
 from checks import raises
 import modemnet
 from linkcheck import check_exactly_one_final
-from surfacenet import Fed, Rig
+from surfacenet import Fed, Rig, soak
 
 HELLO_WB = b"\x68\x65\x6c\x6c\x6f\x02\x14"
 SIX = b"\x01\x02\x03\x04\x05\x06"
@@ -384,40 +384,13 @@ def test_soak_with_faults_every_request_ends_once():
     # requests both ways through the gateway while the emulators damage,
     # cut and swallow lines, fail sessions, lose signal, make noise and
     # restart: every request ends exactly once and nothing stays behind
-    from acomm.prng import Prng
-
     net = iridium_net()
-    rng = Prng(11)
-    ids = {"buoy": [], "diver": []}
-    faults = ("corrupt_next", "truncate_next", "swallow_next")
-    for i in range(16):
-        src = "buoy" if rng.chance(0.5) else "diver"
-        dst = "diver" if src == "buoy" else "buoy"
-        ids[src].append(net.send(src, dst, b"soak %d" % i, ack=rng.chance(0.6), life=rng.range(60, 400)))
-        emu = net.emus["buoy" if rng.chance(0.5) else "diver"]
-        k = rng.below(6)
-        if k < 3:
-            getattr(emu, faults[k])(None)
-        elif k == 3:
-            emu.fail_sessions((32, 18, 11)[rng.below(3)], rng.range(1, 3))
-        elif k == 4:
-            emu.inject_noise(rng.bytes(rng.range(1, 40)))
-        if i == 9:
-            net.emus["diver"].reboot(net.clk())
-        if i == 5:
-            net.emus["buoy"].set_bars(0)
-        if i == 7:
-            net.emus["buoy"].set_bars(4)
-        net.run(20000, step=50)
-    links = [net.nodes[n].links["acoustic"] for n in ids]
-    assert net.run(900000, step=50, until=lambda: all(not ln._active for ln in links))
-    finals = {}
-    for name in ids:
-        rec = net.rec(name)
-        check_exactly_one_final(rec, ids[name])
-        for rid in ids[name]:
-            finals[rec.final(rid)] = finals.get(rec.final(rid), 0) + 1
-    assert finals.get(DELIVERED) and sum(finals.values()) == 16, finals
-    # both modems are usable again, and both drivers saw the trouble
-    assert net.run(60000, step=50, until=lambda: all(d.ready(net.clk()) for d in net.drivers.values()))
+
+    def fail(rng, emu):
+        emu.fail_sessions((32, 18, 11)[rng.below(3)], rng.range(1, 3))
+
+    events = {9: lambda n: n.emus["diver"].reboot(n.clk()), 5: lambda n: n.emus["buoy"].set_bars(0),
+              7: lambda n: n.emus["buoy"].set_bars(4)}
+    soak(net, 11, 16, 20000, (60, 400), lambda rng, i: b"soak %d" % i, fail, events)
+    # both drivers saw the trouble
     assert net.drivers["diver"].stats["reboots"] >= 1 and net.drivers["buoy"].stats["sessions_failed"] >= 1

@@ -15,7 +15,7 @@ from acomm_sim.gsm_net import GsmNetwork
 from checks import raises
 import modemnet
 from linkcheck import check_exactly_one_final
-from surfacenet import Fed, Rig
+from surfacenet import Fed, Rig, soak
 
 REF_PDU = b"0001000C9144770009103200040548656C6C6F"
 REF_NUMBER = "+447700900123"
@@ -312,43 +312,16 @@ def test_soak_with_faults_every_request_ends_once():
     # requests both ways while the emulated modems damage, cut and swallow
     # lines, refuse sends, lose signal, fill up, make noise and restart:
     # every request ends exactly once and nothing stays behind
-    from acomm.prng import Prng
-
     stations = (("buoy", 1, 1), ("diver", 2, 2))
     net = modemnet.Net(SmsDriver, GsmEmulator, stations=stations, broadcast=None,
                        drv_opts=dict(FAST, numbers=NUMBERS, list_period_ms=30000),
                        emu_opts={"send_ms": 1000, "storage": 2}, link_opts={"ack_timeout_ms": 60000})
     assert net.up(5000)
-    rng = Prng(12)
-    ids = {"buoy": [], "diver": []}
-    faults = ("corrupt_next", "truncate_next", "swallow_next")
-    for i in range(20):
-        src = "buoy" if rng.chance(0.5) else "diver"
-        dst = "diver" if src == "buoy" else "buoy"
-        ids[src].append(net.send(src, dst, rng.bytes(rng.range(1, 138)), ack=rng.chance(0.6), life=rng.range(30, 300)))
-        emu = net.emus["buoy" if rng.chance(0.5) else "diver"]
-        k = rng.below(6)
-        if k < 3:
-            getattr(emu, faults[k])(None)
-        elif k == 3:
-            emu.fail_sends((38, 42, 331)[rng.below(3)])
-        elif k == 4:
-            emu.inject_noise(rng.bytes(rng.range(1, 40)))
-        if i == 11:
-            net.emus["diver"].reboot(net.clk())
-        if i == 5:
-            net.emus["buoy"].set_rssi(99)
-        if i == 8:
-            net.emus["buoy"].set_rssi(15)
-        net.run(8000, step=50)
-    links = [net.nodes[n].links["acoustic"] for n in ids]
-    assert net.run(900000, step=50, until=lambda: all(not ln._active for ln in links))
-    finals = {}
-    for name in ids:
-        rec = net.rec(name)
-        check_exactly_one_final(rec, ids[name])
-        for rid in ids[name]:
-            finals[rec.final(rid)] = finals.get(rec.final(rid), 0) + 1
-    assert finals.get(DELIVERED) and sum(finals.values()) == 20, finals
-    assert net.run(60000, step=50, until=lambda: all(d.ready(net.clk()) for d in net.drivers.values()))
+
+    def fail(rng, emu):
+        emu.fail_sends((38, 42, 331)[rng.below(3)])
+
+    events = {11: lambda n: n.emus["diver"].reboot(n.clk()), 5: lambda n: n.emus["buoy"].set_rssi(99),
+              8: lambda n: n.emus["buoy"].set_rssi(15)}
+    soak(net, 12, 20, 8000, (30, 300), lambda rng, i: rng.bytes(rng.range(1, 138)), fail, events)
     assert net.drivers["diver"].stats["reboots"] >= 1
