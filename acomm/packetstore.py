@@ -35,6 +35,10 @@ _PID_BLOCK = const(32)
 _REC_OVERHEAD = const(12)  # acomm.store's record header and CRC
 _F_COMPRESSED = const(1)
 _F_MEDIUM = const(2)
+# Room kept free for the id-limit record: a store rewrites it while the old
+# copy is still live, so two copies must fit. Without it a full store could
+# not move the limit and no new packet id could be handed out safely.
+_META_ROOM = const(2 * (_REC_OVERHEAD + 2))
 
 
 class MemoryStore:
@@ -83,13 +87,16 @@ class PacketStore:
         n = _HDR + (1 + len(p.medium) if p.medium else 0) + len(p.body)
         return n, (n + self.chunk - 1) // self.chunk
 
-    def room(self, p):
-        # whether the overflow rule lets packet p in
+    def room(self, p, urgent=None):
+        # whether the overflow rule lets packet p in (urgent: the packet may
+        # use the last quarter; default: by its priority)
         cap = getattr(self.store, "capacity_bytes", None)
         if cap is None:
             return True
         n, chunks = self._sizes(p)
-        limit = cap if p.prio <= self.urgent else cap - cap // 4
+        if urgent is None:
+            urgent = p.prio <= self.urgent
+        limit = (cap if urgent else cap - cap // 4) - _META_ROOM
         return self.store.live_bytes + n + chunks * _REC_OVERHEAD <= limit
 
     def next_pid(self):
@@ -107,6 +114,8 @@ class PacketStore:
         n, chunks = self._sizes(p)
         if chunks > 255:
             raise StoreFull("packet of %d bytes needs more than 255 records" % len(p.body))
+        if not self.room(p, True):
+            raise StoreFull("store full")
         p.chunks = chunks
         flags = (_F_COMPRESSED if p.compressed else 0) | (_F_MEDIUM if p.medium else 0)
         e = p.expiry & 0xFFFFFFFF

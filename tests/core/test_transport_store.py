@@ -131,3 +131,35 @@ def test_a_full_relay_refuses_and_the_sender_keeps_the_packet():
     assert w.run(1200000, until=lambda: packets(b))
     assert packets(b)[0][1:] == ("diver", "buoy", data)
     assert statuses(a, pid) == [QUEUED, TRANSMITTED]
+
+
+class _Pkt:
+    # what PacketStore needs of a transport packet
+    def __init__(self, pid, body, prio=5):
+        self.origin, self.final, self.pid, self.prio, self.expiry = 2, 1, pid, prio, 2000000000
+        self.key = (2 << 16) | pid
+        self.body, self.compressed, self.medium, self.chunks = body, False, None, 0
+
+
+def test_a_full_store_can_still_move_the_packet_id_limit():
+    # The id limit is rewritten every 32 packets, while its old copy is
+    # still live: packets are refused before they take that room, so a full
+    # store (also one recovered after a restart) still hands out safe ids.
+    with TempDir() as d:
+        st = Store(d.file("ids"), capacity_bytes=4096, max_record=256)
+        ps = PacketStore(st)
+        kept = 0
+        for i in range(200):
+            pid = ps.next_pid()  # never StoreFull
+            try:
+                ps.put(_Pkt(pid, Prng(i).bytes(90), prio=1))
+                kept += 1
+            except StoreFull:
+                pass
+        assert 20 < kept < 200 and ps.pid == 200
+        st.close()
+        st = Store(d.file("ids"), capacity_bytes=4096, max_record=256)
+        ps = PacketStore(st)
+        assert len(ps.recover()) == kept
+        assert ps.next_pid() > 200  # above every id used before the restart
+        st.close()
