@@ -24,6 +24,10 @@
 # with w.add_task(task): task.poll(now) runs at the start of every step it
 # is due and returns when it next wants to run (a ticks value), or None for
 # "the next step". The clock never jumps past a task's wake-up.
+#
+# A node may have more interfaces: w.add_link("buoy", "satellite", "iridium")
+# gives the buoy an Iridium modem beside its SeaTrac (surface modems keep
+# their network on the channel and stay off the acoustic medium).
 # Portable Python (the core tests run it on MicroPython too).
 
 from acomm.clock import ManualClock
@@ -97,6 +101,9 @@ class SimNode:
         self.address = address
         self.events = []
         self.wake = None  # next step due (None: at the next world step)
+        # more links of this node (World.add_link): [link, driver, emulator,
+        # host end, modem end] each; the first link is the fields above
+        self.extra = []
 
     @property
     def link(self):
@@ -147,6 +154,24 @@ class World:
         self._order.append(sn)
         return sn
 
+    def add_link(self, name, link, modem, address=None, driver_opts=None, emu_opts=None, link_opts=None):
+        # a second (third...) interface for node `name`: e.g. a buoy with a
+        # SeaTrac on the acoustic channel and an Iridium modem. The modem's
+        # emulator shares the World's channel (surface modems keep their
+        # network there and stay off the acoustic medium).
+        sn = self.nodes[name]
+        make_driver, make_emu = MODEMS[modem]
+        addr = sn.node.node_id if address is None else address
+        host, dev = uart_pair(rxbuf=4096, clock=self.clock)
+        driver = make_driver(addr, dict(driver_opts or {}))
+        emu = make_emu(self.channel, addr, self.clock(), dict(emu_opts or {}))
+        lo = {"advert_period_ms": 60000}
+        lo.update(link_opts or {})
+        lk = sn.node.add_link(link, driver, host, **lo)
+        sn.extra.append([lk, driver, emu, host, dev])
+        sn.wake = None
+        return lk
+
     def add_task(self, task):
         self._tasks.append([task, None])
         return task
@@ -166,10 +191,19 @@ class World:
             for sn in self._order:
                 sn.wake = None
 
+    def _extra_bytes(self, sn):
+        for x in sn.extra:
+            if x[3].any():
+                return True
+        return False
+
     def _quiet_until(self, sn, now):
         # when this node next needs a step; None means at the next one
         if sn.host_end.any():
             return None
+        for lk, d, _, host, _ in sn.extra:
+            if host.any() or not lk.idle(now) or len(lk.queue) or not d.ready(now):
+                return None
         link = sn.link
         if not link.idle(now):
             return None
@@ -196,7 +230,7 @@ class World:
             self._run_tasks(now)
         for sn in self._order:
             w = sn.wake
-            if w is None or ticks_diff(now, w) >= 0 or sn.host_end.any():
+            if w is None or ticks_diff(now, w) >= 0 or sn.host_end.any() or self._extra_bytes(sn):
                 sn.node.step(now)
                 sn.wake = self._quiet_until(sn, now)
                 self.node_steps += 1
@@ -206,11 +240,19 @@ class World:
             if dev.any():
                 sn.emu.feed(now, dev.read())
             sn.emu.poll(now)
+            for x in sn.extra:
+                if x[4].any():
+                    x[2].feed(now, x[4].read())
+                x[2].poll(now)
         ch.poll(now)
         for sn in self._order:
             out = sn.emu.take_output()
             if out:
                 sn.modem_end.write(out)
+            for x in sn.extra:
+                out = x[2].take_output()
+                if out:
+                    x[4].write(out)
         self.clock.advance(self.step_ms)
         self.steps += 1
 
@@ -231,12 +273,13 @@ class World:
             w = sn.wake
             if w is None:
                 return None
-            idle = getattr(sn.emu, "idle", None)
-            if idle is None or not idle(now):
-                return None
-            for end in (sn.host_end, sn.modem_end):
-                if end.any() or end.in_flight():
+            for emu, ends in [(sn.emu, (sn.host_end, sn.modem_end))] + [(x[2], (x[3], x[4])) for x in sn.extra]:
+                idle = getattr(emu, "idle", None)
+                if idle is None or not idle(now):
                     return None
+                for end in ends:
+                    if end.any() or end.in_flight():
+                        return None
             if first is None or ticks_diff(w, first) < 0:
                 first = w
         return first
