@@ -21,6 +21,11 @@ def main(argv=None):
 
     emulate.add_arguments(e)
 
+    f = sub.add_parser("flash", help="copy a board's program (boards/NAME) to a MicroPython board with mpremote")
+    from . import flash
+
+    flash.add_arguments(f)
+
     n = sub.add_parser("node", help="a node on UDP and/or TCP links; prints events, sends stdin lines 'DST TEXT'")
     from . import ipnode
 
@@ -35,6 +40,8 @@ def main(argv=None):
         return demo.main(args)
     if args.cmd == "emulate":
         return emulate.main(args)
+    if args.cmd == "flash":
+        return flash.main(args)
     if args.cmd == "node":
         return ipnode.main(args)
     p.print_help()
