@@ -18,6 +18,7 @@ from .names import NameTable
 
 _READ_CHUNK = const(256)
 _EVENT_BACKLOG = const(64)
+_READS_PER_STEP = const(16)
 
 
 class Node:
@@ -102,9 +103,16 @@ class Node:
                 pump(now)
                 continue
             if stream is not None:
+                # a bounded number of reads: a stream that never runs dry
+                # (a babbling device, a fault) must not hold the loop here;
+                # what is left is read at the next step
+                reads = _READS_PER_STEP
                 data = stream.read(_READ_CHUNK)
                 while data:
                     link.feed(now, data)
+                    reads -= 1
+                    if not reads:
+                        break
                     data = stream.read(_READ_CHUNK)
             link.poll(now)
             if stream is not None:
