@@ -49,8 +49,9 @@ def main(argv):
         i += 1
     if not dirs:
         dirs = [root + "/tests/core"]
-    # the core, and the simulator's portable emulators (driver tests use them)
-    for p in (root + "/ports/sim", root):
+    # the core, the simulator's portable emulators (driver tests use them)
+    # and the MicroPython port (its board assembly runs in the simulator)
+    for p in (root + "/ports/micropython", root + "/ports/sim", root):
         if p not in sys.path:
             sys.path.insert(0, p)
     passed = failed = 0

@@ -104,6 +104,8 @@ class SimNode:
         # more links of this node (World.add_link): [link, driver, emulator,
         # host end, modem end] each; the first link is the fields above
         self.extra = []
+        # one round of the node's work; a board's Board.tick (World.adopt)
+        self.step = node.step if node is not None else None
 
     @property
     def link(self):
@@ -150,6 +152,7 @@ class World:
         lo.update(link_opts or {})
         node.add_link(link, MacDriver(driver, mac) if mac is not None else driver, host, **lo)
         sn.node, sn.driver, sn.emu = node, driver, emu
+        sn.step = node.step
         self.nodes[name] = sn
         self._order.append(sn)
         return sn
@@ -171,6 +174,37 @@ class World:
         sn.extra.append([lk, driver, emu, host, dev])
         sn.wake = None
         return lk
+
+    def modem_ends(self, modem, address, emu_opts=None, position=None):
+        # a modem in the water whose host end is for a node built elsewhere
+        # (a board's, acomm_mp.assemble): -> [emulator, host end, modem end]
+        host, dev = uart_pair(rxbuf=4096, clock=self.clock)
+        emu = MODEMS[modem][1](self.channel, address, self.clock(), dict(emu_opts or {}))
+        if position is not None:
+            self.channel.set_position(address, position[0], position[1], position[2])
+        return [emu, host, dev]
+
+    def adopt(self, name, node, ends, step=None):
+        # a node built elsewhere joins the World: ends[i] = modem_ends() of
+        # its i-th link (in node.links order); step(now) replaces node.step
+        names = list(node.links)
+        emu, host, dev = ends[0]
+        sn = SimNode(name, node, node.links[names[0]].driver, emu, host, dev, None)
+        for k in range(1, len(ends)):
+            lk = node.links[names[k]]
+            e = ends[k]
+            sn.extra.append([lk, lk.driver, e[0], e[1], e[2]])
+        if step is not None:
+            sn.step = step
+        for other in self._order:
+            if node.names.id_of(other.name) is None:
+                node.names.add(other.name, other.node.node_id)
+            if other.node.names.id_of(name) is None:
+                other.node.names.add(name, node.node_id)
+        sn.events = []
+        self.nodes[name] = sn
+        self._order.append(sn)
+        return sn
 
     def add_task(self, task):
         self._tasks.append([task, None])
@@ -231,7 +265,7 @@ class World:
         for sn in self._order:
             w = sn.wake
             if w is None or ticks_diff(now, w) >= 0 or sn.host_end.any() or self._extra_bytes(sn):
-                sn.node.step(now)
+                sn.step(now)
                 sn.wake = self._quiet_until(sn, now)
                 self.node_steps += 1
             else:

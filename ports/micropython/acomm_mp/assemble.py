@@ -1,0 +1,99 @@
+# A board's node built from its checked configuration (acomm_mp.boardconfig):
+# the node and its name table, one link per modem with that modem's sans-IO
+# driver, the store-and-forward transport on the board's store, and the
+# station (acomm.station) when the board sends reports by itself.
+#
+# The I/O comes in from outside, so the same assembly runs on a board
+# (acomm_mp.start: machine.UART, a store on flash, time.ticks_ms) and in
+# tests and the simulator (fake UARTs, a RAM store, a virtual clock):
+#   open_uart(link_cfg) -> stream     open_store(storage_cfg) -> store
+#
+# Board.tick(now) is one round of the main loop. It never lets an error out:
+# a MemoryError in the middle of a transfer, or anything a driver raises on
+# garbage, is counted, reported once per kind through say(), and the node
+# carries on at the next tick (the store still holds every packet).
+
+import gc
+
+from acomm.compat import ticks_add, ticks_diff
+from acomm.node import Node
+from acomm.packetstore import MemoryStore
+from acomm.station import Station
+from acomm.transport import Transport
+
+from .boardconfig import ConfigError
+from .modems import driver_class
+
+
+class Board:
+    def __init__(self, cfg, node, transport, station, say):
+        self.cfg = cfg
+        self.node = node
+        self.transport = transport
+        self.station = station
+        self.say = say
+        self.wdt = None
+        self._gc_due = None
+        self.stats = {"ticks": 0, "errors": 0, "oom": 0, "gc": 0}
+        self._reported = []  # error kinds already reported
+        self.mem_peak = 0
+
+    def tick(self, now):
+        self.stats["ticks"] += 1
+        try:
+            self.node.step(now)
+            if self.station is not None:
+                self.station.poll(now)
+        except MemoryError:
+            self.stats["oom"] += 1
+            gc.collect()
+            self._report("out of memory during a step; packets stay in the store, carrying on")
+        except Exception as e:  # noqa: BLE001 - the node must keep running at sea
+            self.stats["errors"] += 1
+            self._report("error during a step: %s %s" % (type(e).__name__, e))
+        if self.wdt is not None:
+            self.wdt.feed()
+        if self._gc_due is None or ticks_diff(now, self._gc_due) >= 0:
+            # between steps nothing is half-built: a safe point to collect
+            self._gc_due = ticks_add(now, self.cfg["gc_ms"])
+            self._measure()
+            gc.collect()
+            self.stats["gc"] += 1
+
+    def _measure(self):
+        alloc = getattr(gc, "mem_alloc", None)
+        if alloc is not None:
+            a = alloc()
+            if a > self.mem_peak:
+                self.mem_peak = a
+
+    def _report(self, text):
+        kind = text.split(":")[0]
+        if kind in self._reported:
+            return
+        if len(self._reported) < 8:
+            self._reported.append(kind)
+        self.say("acomm %s: %s" % (self.cfg["name"], text))
+
+
+def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None, say=print, make_report=None):
+    node = Node(cfg["name"], cfg["node_id"], clock, listener=listener)
+    for name in cfg["peers"]:
+        node.names.add(name, cfg["peers"][name])
+    for i, lk in enumerate(cfg["links"]):
+        try:
+            drv = driver_class(lk["modem"])(lk["address"], **lk["options"])
+        except TypeError as e:
+            raise ConfigError("board config: links[%d].options: %s" % (i, e))
+        opts = dict(lk["link"])
+        opts["medium"] = lk["medium"]
+        node.add_link(lk["name"], drv, open_uart(lk), **opts)
+    st = cfg["storage"]
+    store = open_store(st) if st is not None and open_store is not None else MemoryStore()
+    transport = Transport(node, store=store, routes=cfg["routes"], wall=wall, max_packet=cfg["max_packet"])
+    station = None
+    sc = cfg["station"]
+    if sc is not None:
+        station = Station(node, transport, report_to=sc["report_to"], report_period_s=sc["report_period_s"],
+                          make_report=make_report, alarm_to=sc["alarm_to"])
+    return Board(cfg, node, transport, station, say)

@@ -1,0 +1,174 @@
+# A board's configuration (boards/<name>/config.py: CONFIG = {...}) checked
+# at start, before anything is opened: a missing or wrong field stops the
+# board with a message that names the field, e.g.
+#   board config: links[1].baud: an integer 300..4000000, not 'fast'
+# check() returns a copy with every default filled in, so the rest of the
+# port reads fields without guessing.
+#
+# Fields (see boards/*/config.py for two complete examples):
+#   name          node name, 1..16 characters
+#   node_id       1..254 (255 is broadcast)
+#   arch          mpy-cross -march of the MCU (armv6m for an RP2040,
+#                 xtensawin for an ESP32-S3); `acomm flash` reads it
+#   peers         {name: node id} of the other nodes it talks to
+#   routes        {final destination: next hop}, both known names
+#   storage       {"path", "capacity", "max_record"} of the packet store on
+#                 flash, or None to keep packets in RAM only
+#   max_packet    the transport's largest packet, bytes
+#   watchdog_ms   machine.WDT timeout, 0 for none
+#   step_ms       main loop period; gc_ms: garbage collection period
+#   links         one dict per modem: name, modem (acomm_mp.modems), uart,
+#                 baud, tx and rx pins (None: the board's default), address
+#                 (default node_id), medium, link (Link options), options
+#                 (driver options)
+#   station       None, or {"report_to", "report_period_s", "alarm_to"}:
+#                 what acomm.station.Station sends by itself
+
+from acomm.errors import AcommError
+
+from .modems import MODEMS
+
+ARCHES = ("x64", "x86", "armv6", "armv6m", "armv7m", "armv7em", "armv7emsp", "armv7emdp", "xtensa", "xtensawin",
+          "rv32imc")
+
+_LINK_OPTIONS = ("queue_capacity", "advert_period_ms", "lost_after", "ack_timeout_ms", "max_retries", "aging_ms",
+                 "dup_window_ms", "ack_window", "overhear", "fec")
+
+
+class ConfigError(AcommError):
+    pass
+
+
+def _fail(field, want, got):
+    raise ConfigError("board config: %s: %s, not %r" % (field, want, got))
+
+
+def _int(d, key, lo, hi, field, default=None):
+    v = d.get(key, default)
+    if v is None and default is None and key not in d:
+        raise ConfigError("board config: %s: missing" % field)
+    if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+        _fail(field, "an integer %d..%d" % (lo, hi), v)
+    return v
+
+
+def _str(d, key, field, maxlen=16, default=None):
+    v = d.get(key, default)
+    if v is None and key not in d and default is None:
+        raise ConfigError("board config: %s: missing" % field)
+    if not isinstance(v, str) or not 1 <= len(v) <= maxlen:
+        _fail(field, "a string of 1..%d characters" % maxlen, v)
+    return v
+
+
+def _dict(d, key, field, default):
+    v = d.get(key, default)
+    if v is None:
+        return default
+    if not isinstance(v, dict):
+        _fail(field, "a dict", v)
+    return v
+
+
+def _pin(d, key, field):
+    v = d.get(key)
+    if v is not None and (isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= 99):
+        _fail(field, "a pin number 0..99 or None", v)
+    return v
+
+
+def _link(i, lk, node_id, names):
+    f = "links[%d]" % i
+    if not isinstance(lk, dict):
+        _fail(f, "a dict", lk)
+    out = {}
+    out["name"] = name = _str(lk, "name", f + ".name")
+    if name in names:
+        _fail(f + ".name", "a name no other link has", name)
+    names.append(name)
+    modem = lk.get("modem")
+    if modem not in MODEMS:
+        _fail(f + ".modem", "one of " + ", ".join(sorted(MODEMS)), modem)
+    out["modem"] = modem
+    out["uart"] = _int(lk, "uart", 0, 9, f + ".uart")
+    out["baud"] = _int(lk, "baud", 300, 4000000, f + ".baud")
+    out["tx"] = _pin(lk, "tx", f + ".tx")
+    out["rx"] = _pin(lk, "rx", f + ".rx")
+    out["address"] = _int(lk, "address", 0, 255, f + ".address", node_id)
+    out["medium"] = _str(lk, "medium", f + ".medium", 16, name)
+    opts = _dict(lk, "link", f + ".link", {})
+    for k in opts:
+        if k not in _LINK_OPTIONS:
+            _fail(f + ".link", "Link options among " + ", ".join(_LINK_OPTIONS), k)
+    out["link"] = dict(opts)
+    out["options"] = dict(_dict(lk, "options", f + ".options", {}))
+    for k in lk:
+        if k not in out:
+            _fail(f, "known fields only", k)
+    return out
+
+
+def check(cfg):
+    if not isinstance(cfg, dict):
+        _fail("CONFIG", "a dict", cfg)
+    out = {}
+    out["name"] = _str(cfg, "name", "name")
+    out["node_id"] = node_id = _int(cfg, "node_id", 1, 254, "node_id")
+    arch = cfg.get("arch")
+    if arch not in ARCHES:
+        _fail("arch", "one of " + ", ".join(ARCHES), arch)
+    out["arch"] = arch
+    peers = _dict(cfg, "peers", "peers", {})
+    for k in peers:
+        v = peers[k]
+        if not isinstance(k, str) or not 1 <= len(k) <= 16:
+            _fail("peers", "names of 1..16 characters", k)
+        if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 254 or v == node_id:
+            _fail("peers." + k, "a node id 1..254 other than node_id", v)
+    out["peers"] = dict(peers)
+    routes = _dict(cfg, "routes", "routes", {})
+    for k in routes:
+        if k not in peers:
+            _fail("routes", "destinations among the peers", k)
+        if routes[k] not in peers:
+            _fail("routes." + k, "a next hop among the peers", routes[k])
+    out["routes"] = dict(routes)
+    st = cfg.get("storage")
+    if st is not None:
+        if not isinstance(st, dict):
+            _fail("storage", "a dict or None", st)
+        st = {
+            "path": _str(st, "path", "storage.path", 64),
+            "capacity": _int(st, "capacity", 1024, 1 << 24, "storage.capacity"),
+            "max_record": _int(st, "max_record", 16, 65535, "storage.max_record", 256),
+        }
+    out["storage"] = st
+    out["max_packet"] = _int(cfg, "max_packet", 64, 65536, "max_packet", 4096)
+    wd = _int(cfg, "watchdog_ms", 0, 60000, "watchdog_ms", 0)
+    if 0 < wd < 500:
+        _fail("watchdog_ms", "0 or 500..60000", wd)
+    out["watchdog_ms"] = wd
+    out["step_ms"] = _int(cfg, "step_ms", 1, 1000, "step_ms", 10)
+    out["gc_ms"] = _int(cfg, "gc_ms", 10, 60000, "gc_ms", 1000)
+    links = cfg.get("links")
+    if not isinstance(links, (list, tuple)) or not links:
+        _fail("links", "a non-empty list of link dicts", links)
+    names = []
+    out["links"] = [_link(i, lk, node_id, names) for i, lk in enumerate(links)]
+    sta = cfg.get("station")
+    if sta is not None:
+        if not isinstance(sta, dict):
+            _fail("station", "a dict or None", sta)
+        s = {}
+        for key in ("report_to", "alarm_to"):
+            v = sta.get(key)
+            if v is not None and v not in peers:
+                _fail("station." + key, "a peer name", v)
+            s[key] = v
+        s["report_period_s"] = _int(sta, "report_period_s", 0, 86400, "station.report_period_s", 0)
+        sta = s
+    out["station"] = sta
+    for k in cfg:
+        if k not in out:
+            _fail("CONFIG", "known fields only", k)
+    return out

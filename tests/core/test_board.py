@@ -1,0 +1,217 @@
+# The MicroPython port's board layer (ports/micropython/acomm_mp) and the two
+# board definitions (boards/*/config.py), on both runtimes: configurations
+# are checked with messages that name the field, a board's node is
+# assembled from its config and runs for a simulated minute against
+# emulated modems with frames flowing, the main loop's tick survives
+# MemoryError and garbage, and machine.UART is normalised.
+import acomm
+from acomm.catalog import caddy
+from acomm.fakeuart import FakeUART
+from acomm.prng import Prng
+from acomm_mp import start as mpstart
+from acomm_mp.assemble import build
+from acomm_mp.boardconfig import ConfigError, check
+from acomm_mp.uartstream import UartStream
+from acomm_sim.boardsim import run_board
+from checks import raises
+
+ROOT = acomm.__file__.rsplit("/", 2)[0]
+
+
+def _config(board):
+    g = {}
+    with open(ROOT + "/boards/" + board + "/config.py") as f:
+        exec(f.read(), g)
+    return g["CONFIG"]
+
+
+def _copy(d):
+    # a deep enough copy of a config to spoil one field
+    out = {}
+    for k in d:
+        v = d[k]
+        if isinstance(v, dict):
+            v = dict(v)
+        elif isinstance(v, list):
+            v = [dict(x) if isinstance(x, dict) else x for x in v]
+        out[k] = v
+    return out
+
+
+def _error(cfg):
+    return str(raises(ConfigError, check, cfg))
+
+
+def test_both_boards_check_and_fill_defaults():
+    for board in ("buoy_pico", "diver_esp32s3"):
+        cfg = check(_config(board))
+        assert cfg["links"] and cfg["step_ms"] == 10 and cfg["gc_ms"] == 1000
+        for lk in cfg["links"]:
+            assert lk["address"] == cfg["node_id"] and isinstance(lk["options"], dict)
+    buoy = check(_config("buoy_pico"))
+    assert [lk["modem"] for lk in buoy["links"]] == ["seatrac", "iridium"]
+    assert buoy["arch"] == "armv6m" and buoy["station"] is None
+
+
+def test_a_wrong_field_is_named():
+    base = _config("buoy_pico")
+    c = _copy(base)
+    del c["node_id"]
+    assert "node_id: missing" in _error(c)
+    c = _copy(base)
+    c["links"][1]["baud"] = "fast"
+    assert "links[1].baud" in _error(c) and "fast" in _error(c)
+    c = _copy(base)
+    c["links"][0]["modem"] = "tin_can"
+    assert "links[0].modem" in _error(c)
+    c = _copy(base)
+    c["links"][1]["name"] = "acoustic"
+    assert "links[1].name" in _error(c)
+    c = _copy(base)
+    c["routes"] = {"shore": "nobody"}
+    assert "routes.shore" in _error(c)
+    c = _copy(base)
+    c["storage"]["capacity"] = 10
+    assert "storage.capacity" in _error(c)
+    c = _copy(base)
+    c["nodeid"] = 1
+    assert "nodeid" in _error(c)
+    c = _copy(base)
+    c["arch"] = "z80"
+    assert "arch" in _error(c)
+    c = _copy(base)
+    c["peers"] = {"diver": 1}  # the board's own id
+    assert "peers.diver" in _error(c)
+    c = _copy(base)
+    c["links"][0]["link"] = {"advert_period": 5}
+    assert "links[0].link" in _error(c)
+    c = _copy(base)
+    c["watchdog_ms"] = 100
+    assert "watchdog_ms" in _error(c)
+    c = _copy(base)
+    c["links"] = []
+    assert "links" in _error(c)
+    # a driver option the driver does not take: found when the node is built
+    c = _copy(base)
+    c["links"][1]["options"] = {"no_such_option": 1}
+    e = raises(ConfigError, build, check(c), lambda lk: FakeUART())
+    assert "links[1].options" in str(e)
+
+
+def test_the_buoy_relays_for_a_simulated_minute():
+    r = run_board(_config("buoy_pico"), {"diver": "seatrac", "shore": "iridium"}, via={"diver": "shore"})
+    assert r["sim_ms"] >= 60000
+    ac, sat = r["links"]["acoustic"], r["links"]["satellite"]
+    assert ac["tx_frames"] > 0 and ac["rx_frames"] > 0  # frames flowed both ways acoustically
+    assert sat["tx_frames"] > 0 and sat["rx_frames"] > 0  # and over Iridium
+    srcs = sorted(p[0] for p in r["board_packets"])
+    assert srcs == ["diver", "shore"]  # each peer's chat line reached the board
+    assert r["relayed"] == 1  # the diver's packet for shore is in the buoy's custody
+    assert r["board"]["errors"] == 0 and r["board"]["oom"] == 0 and r["board"]["gc"] >= 59
+
+
+def test_the_diver_tablet_sends_its_alarm_and_hears_the_buoy():
+    r = run_board(_config("diver_esp32s3"), {"buoy": "seatrac"})
+    got = r["peer_packets"]["buoy"]
+    assert len(got) == 1 and got[0][0] == "diver"
+    m = caddy.CATALOG.unpack(got[0][2])
+    assert m[0][0] is caddy.ALARM and m[0][1]["alarm"] == "low_air"
+    assert r["inbox"] == [("buoy", "chat", {"text": "hello buoy"})]
+    assert r["station"]["alarms"] == 1 and r["board"]["errors"] == 0
+
+
+class _Wdt:
+    def __init__(self):
+        self.fed = 0
+
+    def feed(self):
+        self.fed += 1
+
+
+class _Garbage:
+    # a UART that hands up noise, or nothing at all (read() -> None)
+    def __init__(self, seed, silent=False):
+        self.rng = Prng(seed)
+        self.silent = silent
+
+    def any(self):
+        return 0 if self.silent else 8
+
+    def read(self, n=-1):
+        return None if self.silent else self.rng.bytes(8)
+
+    def write(self, b):
+        return None  # a UART timeout
+
+
+def test_errors_and_out_of_memory_in_a_step_do_not_stop_the_loop():
+    said = []
+    cfg = check(_config("buoy_pico"))
+    board = build(cfg, lambda lk: FakeUART(), say=said.append)
+    board.wdt = _Wdt()
+    real = board.node.step
+    faults = [MemoryError("heap"), ValueError("bug"), MemoryError("again")]
+
+    def flaky(now):
+        if faults:
+            raise faults.pop(0)
+        return real(now)
+
+    board.node.step = flaky
+    for k in range(10):
+        board.tick(k * 10)
+    assert board.stats["oom"] == 2 and board.stats["errors"] == 1 and board.stats["ticks"] == 10
+    assert board.wdt.fed == 10  # fed on every tick, faulty or not
+    assert len(said) == 2  # each kind reported once, not once per tick
+    assert "out of memory" in said[0] and "ValueError" in said[1]
+
+
+def test_a_uart_of_garbage_or_silence_never_stops_the_node():
+    cfg = check(_config("buoy_pico"))
+    uarts = [_Garbage(3), _Garbage(4, silent=True)]
+    board = build(cfg, lambda lk: uarts.pop(0))
+    for k in range(2000):
+        board.tick(k * 10)
+    assert board.stats["errors"] == 0 and board.stats["oom"] == 0
+    assert board.node.links["acoustic"].stats is not None
+
+
+class _Pin:
+    def __init__(self, n):
+        self.n = n
+
+
+class _Uart:
+    # machine.UART as on a port whose constructor has no rxbuf
+    def __init__(self, uid, **kw):
+        if "rxbuf" in kw:
+            raise TypeError("unexpected keyword argument 'rxbuf'")
+        self.uid, self.kw = uid, kw
+        self.rx = b"\x01\x02\x03"
+
+    def any(self):
+        return len(self.rx)
+
+    def readinto(self, buf):
+        n = min(len(buf), len(self.rx))
+        buf[:n] = self.rx[:n]
+        self.rx = self.rx[n:]
+        return n
+
+    def write(self, b):
+        return 2 if len(b) > 2 else None
+
+
+class _Machine:
+    Pin = _Pin
+    UART = _Uart
+
+
+def test_machine_uart_is_normalised():
+    lk = check(_config("buoy_pico"))["links"][1]
+    s = mpstart.open_uart(_Machine, lk)
+    assert s.uart.uid == 1 and s.uart.kw["baudrate"] == 19200 and s.uart.kw["tx"].n == 4
+    assert s.read(2) == b"\x01\x02" and s.read(64) == b"\x03"
+    assert s.read(64) is None  # nothing waiting: None, never a blocking read
+    assert s.write(b"abcdef") == 2 and s.write(b"a") == 0  # a timeout counts as nothing written
+    assert s.bytes_in == 3 and s.bytes_out == 2
