@@ -45,13 +45,13 @@ def children(pid):
 
 
 class Board:
-    def __init__(self, tmp_path):
+    def __init__(self, tmp_path, heap="192wk"):
         self.flash = tmp_path / "flash"
         self.link = str(tmp_path / "ttyFAKE")
         self.errlog = open(tmp_path / "fakeboard.err", "w+")
         self.proc = subprocess.Popen(
             [sys.executable, str(FAKEBOARD), "--link", self.link, "--flash", str(self.flash),
-             "--heap", "192wk", "--micropython", str(MICROPYTHON)],
+             "--heap", heap, "--micropython", str(MICROPYTHON)],
             stdout=subprocess.PIPE, stderr=self.errlog, text=True)
         deadline = time.monotonic() + TIMEOUT_S
         while True:
