@@ -24,6 +24,7 @@ BENCHES = {
     "teleop": "teleop_workload",
     "transfer": "transfer_workload",
     "store": "store_workload",
+    "footprint": "footprint_workload",
 }
 
 
