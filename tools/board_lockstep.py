@@ -63,6 +63,18 @@ def main(path, store_path):
     with open(path) as f:
         exec(f.read(), g)
     cfg = check(g["CONFIG"])
+    # every module the board runs, loaded before the node exists: what is
+    # allocated then is mostly bytecode, which firmware with the modules
+    # frozen in (ports/micropython/manifest.py) keeps in flash instead
+    from acomm_mp.modems import driver_class
+
+    for lk in cfg["links"]:
+        driver_class(lk["modem"])
+    import acomm.store  # noqa: F401
+    import acomm_mp.runloop  # noqa: F401
+
+    gc.collect()
+    code = gc.mem_alloc()
     ports = []
 
     def open_uart(lk):
@@ -105,8 +117,8 @@ def main(path, store_path):
         s = board.node.links[name].stats
         tx += s.get("tx_frames", 0)
         rx += s.get("rx_frames", 0)
-    print('{"peak": %d, "after_build": %d, "oom": %d, "errors": %d, "tx_frames": %d, "rx_frames": %d, "relayed": %d}'
-          % (peak, base, st["oom"], st["errors"], tx, rx, board.transport.stats["relayed"]))
+    print('{"peak": %d, "after_build": %d, "code": %d, "oom": %d, "errors": %d, "tx_frames": %d, "rx_frames": %d, "relayed": %d}'
+          % (peak, base, code, st["oom"], st["errors"], tx, rx, board.transport.stats["relayed"]))
 
 
 main(sys.argv[1], sys.argv[2])

@@ -14,6 +14,10 @@
 #                     to 256 bytes
 #   heap_peak_bytes   gc.mem_alloc() at its highest, at a roomy heap, in
 #                     32-bit terms (the unix port is 64-bit: halved)
+#   heap_peak_without_code_bytes   the peak less what the loaded modules
+#                     take (bytecode; in flash when the modules are frozen
+#                     into firmware): an estimate, not a measured run;
+#                     heap_min_without_code_bytes the same for heap_min
 #   mpy_total_bytes   the precompiled modules copied to the board (armv6m)
 import json
 import os
@@ -166,6 +170,10 @@ def run(emit):
         emit("heap_min_bytes", hi, "bytes")
         emit("heap_peak_bytes", roomy["peak"] // 2, "bytes")
         emit("heap_after_start_bytes", roomy["after_build"] // 2, "bytes")
+        # the part of the peak that is not module code: an estimate of what
+        # a board with acomm frozen into its firmware needs
+        emit("heap_peak_without_code_bytes", (roomy["peak"] - roomy["code"]) // 2, "bytes")
+        emit("heap_min_without_code_bytes", hi - roomy["code"] // 2, "bytes")
         emit("mpy_total_bytes", flash.mpy_total_bytes(flash.board_path(BOARD), stage_dir=os.path.join(tmp, "arm")),
              "bytes")
     finally:
