@@ -18,7 +18,6 @@ import gc
 from acomm.compat import ticks_add, ticks_diff
 from acomm.node import Node
 from acomm.packetstore import MemoryStore
-from acomm.station import Station
 from acomm.transport import Transport
 
 from .boardconfig import ConfigError
@@ -94,6 +93,10 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
     station = None
     sc = cfg["station"]
     if sc is not None:
+        # imported only here: a relay without a station never loads the
+        # station's codec and catalog into RAM
+        from acomm.station import Station
+
         station = Station(node, transport, report_to=sc["report_to"], report_period_s=sc["report_period_s"],
                           make_report=make_report, alarm_to=sc["alarm_to"])
     return Board(cfg, node, transport, station, say)
