@@ -34,7 +34,7 @@ class Board:
         self.wdt = None
         self._gc_due = None
         self.stats = {"ticks": 0, "errors": 0, "oom": 0, "gc": 0}
-        self._reported = []  # error kinds already reported
+        self._reported = []  # exception types already reported (at most 8)
         self.mem_peak = 0
 
     def tick(self, now):
@@ -46,10 +46,11 @@ class Board:
         except MemoryError:
             self.stats["oom"] += 1
             gc.collect()
-            self._report("out of memory during a step; packets stay in the store, carrying on")
+            self._report("MemoryError", "out of memory during a step; packets stay in the store, carrying on")
         except Exception as e:  # noqa: BLE001 - the node must keep running at sea
             self.stats["errors"] += 1
-            self._report("error during a step: %s %s" % (type(e).__name__, e))
+            kind = type(e).__name__
+            self._report(kind, "error during a step: %s %s" % (kind, e))
         if self.wdt is not None:
             self.wdt.feed()
         if self._gc_due is None or ticks_diff(now, self._gc_due) >= 0:
@@ -66,12 +67,12 @@ class Board:
             if a > self.mem_peak:
                 self.mem_peak = a
 
-    def _report(self, text):
-        kind = text.split(":")[0]
-        if kind in self._reported:
+    def _report(self, kind, text):
+        # once per exception type, and for at most 8 types: a fault that
+        # repeats every tick must not flood the console (stats count all)
+        if kind in self._reported or len(self._reported) >= 8:
             return
-        if len(self._reported) < 8:
-            self._reported.append(kind)
+        self._reported.append(kind)
         self.say("acomm %s: %s" % (self.cfg["name"], text))
 
 

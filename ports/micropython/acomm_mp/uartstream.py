@@ -16,10 +16,6 @@ class UartStream:
         self.bytes_in = 0
         self.bytes_out = 0
 
-    def any(self):
-        n = self.uart.any()
-        return n if n else 0
-
     def read(self, n=256):
         if not self.uart.any():
             return None
