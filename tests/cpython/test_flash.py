@@ -12,11 +12,10 @@ import time
 
 import pytest
 
-from acomm_cpython import cli, flash
+from acomm_cpython import boardfiles, cli, flash
 
-ROOT = flash.repo_root()
+ROOT = boardfiles.repo_root()
 BOARDS = os.path.join(ROOT, "boards")
-sys.path.insert(0, os.path.join(ROOT, "ports", "micropython"))
 from acomm_mp.modems import MODEMS  # noqa: E402
 
 # mpy header byte 2 is (arch << 2) | 3 for a module with native code
@@ -25,7 +24,7 @@ _ALL_DRIVERS = set(m for m, _ in MODEMS.values())
 
 
 def _board_drivers(board):
-    cfg = flash.load_config(os.path.join(BOARDS, board))
+    cfg = boardfiles.load_config(os.path.join(BOARDS, board))
     return set(MODEMS[lk["modem"]][0] for lk in cfg["links"])
 
 
@@ -63,8 +62,8 @@ def test_dry_run_lists_the_board_and_only_its_drivers(capsys, board, want, not_w
 
 @pytest.mark.parametrize("board", ["buoy_pico", "diver_esp32s3"])
 def test_every_planned_module_exists_where_the_device_path_says(board):
-    dirs = flash.package_dirs()
-    entries = flash.plan(os.path.join(BOARDS, board), compile=False)
+    dirs = boardfiles.package_dirs()
+    entries = boardfiles.plan(os.path.join(BOARDS, board), compile=False)
     assert len(set(e.device for e in entries)) == len(entries)
     for e in entries:
         assert os.path.isfile(e.host), e
@@ -82,8 +81,8 @@ def test_every_planned_module_exists_where_the_device_path_says(board):
 @pytest.mark.parametrize("board,arch", [("buoy_pico", "armv6m"), ("diver_esp32s3", "xtensawin")])
 def test_compiles_mpy_for_the_board_arch(tmp_path, board, arch):
     bd = os.path.join(BOARDS, board)
-    assert flash.load_config(bd)["arch"] == arch
-    entries = flash.plan(bd, stage_dir=str(tmp_path))
+    assert boardfiles.load_config(bd)["arch"] == arch
+    entries = boardfiles.plan(bd, stage_dir=str(tmp_path))
     mods = [e for e in entries if e.device.startswith("/lib/")]
     assert mods and all(e.device.endswith(".mpy") for e in mods)
     assert [e.device for e in entries[:2]] == ["/main.py", "/config.py"]
@@ -96,9 +95,9 @@ def test_compiles_mpy_for_the_board_arch(tmp_path, board, arch):
     if viper:  # native code carries the arch in its header
         with open(viper[0].host, "rb") as f:
             assert f.read(3)[2] >> 2 == _ARCH_CODE[arch]
-    total = flash.mpy_total_bytes(bd, stage_dir=str(tmp_path / "again"))
+    total = boardfiles.mpy_total_bytes(bd, stage_dir=str(tmp_path / "again"))
     assert total == sum(e.size for e in mods)
-    fp = flash.footprint(bd, stage_dir=str(tmp_path / "fp"))
+    fp = boardfiles.footprint(bd, stage_dir=str(tmp_path / "fp"))
     assert fp["mpy_total_bytes"] == total and fp["arch"] == arch and fp["modules"] == len(mods)
 
 
@@ -112,7 +111,7 @@ def test_x64_mpy_imports_on_the_unix_port(tmp_path, board):
     mp = _micropython()
     if mp is None:
         pytest.skip("no micropython command")
-    entries = flash.plan(os.path.join(BOARDS, board), arch="x64", stage_dir=str(tmp_path / "stage"))
+    entries = boardfiles.plan(os.path.join(BOARDS, board), arch="x64", stage_dir=str(tmp_path / "stage"))
     dev = tmp_path / "device"
     for e in entries:
         dst = dev / e.device.lstrip("/")
@@ -185,13 +184,13 @@ def test_closure_follows_relative_function_and_try_imports(tmp_path):
         p.write_text(text)
     main = tmp_path / "main.py"
     main.write_text("from config import CONFIG\nfrom acomm_mp.start import start\n")
-    got = flash.closure([str(main)], root=str(tmp_path))
+    got = boardfiles.closure([str(main)], root=str(tmp_path))
     assert sorted(got) == ["acomm", "acomm.five", "acomm.four", "acomm.one", "acomm.six", "acomm.sub",
                            "acomm.sub.deep", "acomm.three", "acomm.two", "acomm_mp", "acomm_mp.helper",
                            "acomm_mp.start"]
     (a / "five.py").unlink()
     with pytest.raises(flash.FlashError) as e:
-        flash.closure([str(main)], root=str(tmp_path))
+        boardfiles.closure([str(main)], root=str(tmp_path))
     assert "acomm.five" in str(e.value)
 
 
@@ -211,7 +210,7 @@ class _FakeMpremote:
 
 
 def test_flash_refuses_when_it_does_not_fit(monkeypatch):
-    entries = flash.plan(os.path.join(BOARDS, "buoy_pico"), compile=False)
+    entries = boardfiles.plan(os.path.join(BOARDS, "buoy_pico"), compile=False)
     fake = _FakeMpremote(free=8192, replaced=4096)
     monkeypatch.setattr(flash, "_mpremote", fake)
     with pytest.raises(flash.FlashError) as e:
@@ -222,7 +221,7 @@ def test_flash_refuses_when_it_does_not_fit(monkeypatch):
 
 
 def test_flash_makes_folders_and_copies_in_batches(monkeypatch):
-    entries = flash.plan(os.path.join(BOARDS, "buoy_pico"), compile=False)
+    entries = boardfiles.plan(os.path.join(BOARDS, "buoy_pico"), compile=False)
     fake = _FakeMpremote(free=10 << 20)
     monkeypatch.setattr(flash, "_mpremote", fake)
     n, b = flash.flash("/dev/ttyFAKE", entries, log=lambda s: None)

@@ -28,8 +28,9 @@ from acomm.errors import AcommError
 
 from .modems import MODEMS
 
+# the -march values mpy-cross (1.23 and later) knows
 ARCHES = ("x64", "x86", "armv6", "armv6m", "armv7m", "armv7em", "armv7emsp", "armv7emdp", "xtensa", "xtensawin",
-          "rv32imc")
+          "rv32imc", "rv64imc")
 
 _LINK_OPTIONS = ("queue_capacity", "advert_period_ms", "lost_after", "ack_timeout_ms", "max_retries", "aging_ms",
                  "dup_window_ms", "ack_window", "overhear", "fec")

@@ -16,6 +16,7 @@
 
 from acomm.catalog import caddy
 from acomm.events import EV_PACKET
+from acomm.station import diver_report
 from acomm.transport import Transport
 from acomm_mp.assemble import build
 from acomm_mp.boardconfig import check
@@ -35,6 +36,58 @@ def _positions(k):
     return (100.0 + 40 * k, 30.0 * k, 10.0)
 
 
+def fast_options(modem):
+    # (driver options, emulator options) for a simulated minute
+    return _FAST.get(modem, ({}, {}))
+
+
+def board_ends(w, lk, position=None):
+    # the modem of a board's link (a checked config's links[i]) in the
+    # World, with its fast options added to the driver's: -> modem_ends()
+    drv_opts, emu_opts = fast_options(lk["modem"])
+    for k in drv_opts:
+        lk["options"].setdefault(k, drv_opts[k])
+    return w.modem_ends(lk["modem"], lk["address"], emu_opts, position)
+
+
+def add_peers(w, cfg, peers, via, wall):
+    # the board's peers as simulated nodes with transports: {name: (SimNode,
+    # Transport)}; a peer in `via` routes its final destination through the
+    # board
+    others = {}
+    k = 0
+    for name in peers:
+        modem = peers[name]
+        drv_opts, emu_opts = fast_options(modem)
+        kind = "satellite" if modem in ("iridium", "sms") else "acoustic"
+        lo = dict(_QUIET)
+        lo["medium"] = kind
+        if kind == "satellite":
+            lo.update({"advert_period_ms": 3600000, "ack_timeout_ms": 60000})
+        p = w.add(name, cfg["peers"][name], modem, position=_positions(k) if kind == "acoustic" else None,
+                  link=kind, driver_opts=dict(drv_opts), emu_opts=dict(emu_opts), link_opts=lo)
+        for other in cfg["peers"]:
+            if other != name and p.node.names.id_of(other) is None:
+                p.node.names.add(other, cfg["peers"][other])
+        if p.node.names.id_of(cfg["name"]) is None:
+            p.node.names.add(cfg["name"], cfg["node_id"])
+        routes = {}
+        if via is not None and name in via:
+            routes[via[name]] = cfg["name"]
+        others[name] = (p, Transport(p.node, routes=routes, wall=wall))
+        k += 1
+    return others
+
+
+def send_traffic(w, cfg, others, via):
+    # each peer's chat line to the board, and its packet through the board
+    for name in others:
+        t = others[name][1]
+        t.send(w.now(), cfg["name"], caddy.CATALOG.pack([(caddy.CHAT, {"text": "hello " + name})]), 600, 5)
+        if via is not None and name in via:
+            t.send(w.now(), via[name], ("from " + name + " via " + cfg["name"]).encode(), 3600, 6)
+
+
 def run_board(config, peers, ms=60000, seed=1, via=None, board_position=(0.0, 0.0, 0.0), say=None):
     cfg = check(config)
     w = World(seed=seed)
@@ -42,45 +95,16 @@ def run_board(config, peers, ms=60000, seed=1, via=None, board_position=(0.0, 0.
     ends = []
 
     def open_uart(lk):
-        drv_opts, emu_opts = _FAST.get(lk["modem"], ({}, {}))
-        for k in drv_opts:
-            lk["options"].setdefault(k, drv_opts[k])
-        e = w.modem_ends(lk["modem"], lk["address"], emu_opts,
-                         board_position if len(ends) == 0 else None)
-        ends.append(e)
-        return e[1]
+        ends.append(board_ends(w, lk, board_position if not ends else None))
+        return ends[-1][1]
 
     events = []
     board = build(cfg, open_uart, w.clock, wall, None, listener=events.append, say=say or (lambda s: None),
-                  make_report=lambda now: b"\x80")
-    sn = w.adopt(cfg["name"], board.node, ends, step=board.tick)
-    sn.events = events
-    others = {}
-    k = 0
-    for name in peers:
-        modem = peers[name]
-        nid = cfg["peers"][name]
-        drv_opts, emu_opts = _FAST.get(modem, ({}, {}))
-        kind = "satellite" if modem in ("iridium", "sms") else "acoustic"
-        lo = dict(_QUIET)
-        lo["medium"] = kind
-        if kind == "satellite":
-            lo.update({"advert_period_ms": 3600000, "ack_timeout_ms": 60000})
-        p = w.add(name, nid, modem, position=_positions(k) if kind == "acoustic" else None, link=kind,
-                  driver_opts=dict(drv_opts), emu_opts=dict(emu_opts), link_opts=lo)
-        routes = {}
-        if via is not None and name in via:
-            routes[via[name]] = cfg["name"]
-            if p.node.names.id_of(via[name]) is None:
-                p.node.names.add(via[name], cfg["peers"][via[name]])
-        others[name] = (p, Transport(p.node, routes=routes, wall=wall))
-        k += 1
+                  make_report=diver_report(lambda: {}))
+    w.adopt(cfg["name"], board.node, ends, step=board.tick, events=events)
+    others = add_peers(w, cfg, peers, via, wall)
     w.run(15000)
-    for name in others:
-        p, t = others[name]
-        t.send(w.now(), cfg["name"], caddy.CATALOG.pack([(caddy.CHAT, {"text": "hello " + name})]), 600, 5)
-        if via is not None and name in via:
-            t.send(w.now(), via[name], ("from " + name + " via " + cfg["name"]).encode(), 3600, 6)
+    send_traffic(w, cfg, others, via)
     w.run(5000)
     if board.station is not None:
         board.station.alarm(w.now(), "low_air")

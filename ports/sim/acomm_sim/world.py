@@ -90,6 +90,30 @@ MODEMS = {
 }
 
 
+def _modem_in(now, emu, dev):
+    # what the host wrote reaches the modem; the modem's timers run
+    if dev.any():
+        emu.feed(now, dev.read())
+    emu.poll(now)
+
+
+def _modem_out(emu, dev):
+    out = emu.take_output()
+    if out:
+        dev.write(out)
+
+
+def _modem_quiet(now, emu, host, dev):
+    # nothing can come of this modem and its line before something else does
+    idle = getattr(emu, "idle", None)
+    if idle is None or not idle(now):
+        return False
+    for end in (host, dev):
+        if end.any() or end.in_flight():
+            return False
+    return True
+
+
 class SimNode:
     def __init__(self, name, node, driver, emu, host_end, modem_end, address):
         self.name = name
@@ -127,25 +151,21 @@ class World:
         self.node_skips = 0
         self.jumped_ms = 0
         self._tasks = []  # [task, wake]
+        self._loose = []  # [emulator, host end, modem end] no node owns
 
     def now(self):
         return self.clock()
 
     def add(self, name, node_id, modem, address=None, position=None, track=None, mac=None, link="acoustic",
             driver_opts=None, emu_opts=None, link_opts=None, listener=None):
-        make_driver, make_emu = MODEMS[modem]
         addr = node_id if address is None else address
-        now = self.clock()
-        host, dev = uart_pair(rxbuf=4096, clock=self.clock)
+        driver = MODEMS[modem][0](addr, dict(driver_opts or {}))
+        emu, host, dev = self.modem_ends(modem, addr, emu_opts, position)
         sn = SimNode(name, None, None, None, host, dev, addr)
         node = Node(name, node_id, self.clock, listener=listener or sn.events.append)
         for other in self._order:
             node.names.add(other.name, other.node.node_id)
             other.node.names.add(name, node_id)
-        driver = make_driver(addr, dict(driver_opts or {}))
-        emu = make_emu(self.channel, addr, now, dict(emu_opts or {}))
-        if position is not None:
-            self.channel.set_position(addr, position[0], position[1], position[2])
         if track is not None:
             self.channel.set_track(addr, track)
         lo = {"advert_period_ms": 60000}
@@ -163,11 +183,9 @@ class World:
         # emulator shares the World's channel (surface modems keep their
         # network there and stay off the acoustic medium).
         sn = self.nodes[name]
-        make_driver, make_emu = MODEMS[modem]
         addr = sn.node.node_id if address is None else address
-        host, dev = uart_pair(rxbuf=4096, clock=self.clock)
-        driver = make_driver(addr, dict(driver_opts or {}))
-        emu = make_emu(self.channel, addr, self.clock(), dict(emu_opts or {}))
+        driver = MODEMS[modem][0](addr, dict(driver_opts or {}))
+        emu, host, dev = self.modem_ends(modem, addr, emu_opts)
         lo = {"advert_period_ms": 60000}
         lo.update(link_opts or {})
         lk = sn.node.add_link(link, driver, host, **lo)
@@ -176,17 +194,26 @@ class World:
         return lk
 
     def modem_ends(self, modem, address, emu_opts=None, position=None):
-        # a modem in the water whose host end is for a node built elsewhere
-        # (a board's, acomm_mp.assemble): -> [emulator, host end, modem end]
+        # a modem in the water and its line: -> [emulator, host end, modem
+        # end]. Its host end is for a node: add_link, adopt (a node built
+        # elsewhere, e.g. a board's by acomm_mp.assemble), or add_loose.
         host, dev = uart_pair(rxbuf=4096, clock=self.clock)
         emu = MODEMS[modem][1](self.channel, address, self.clock(), dict(emu_opts or {}))
         if position is not None:
             self.channel.set_position(address, position[0], position[1], position[2])
         return [emu, host, dev]
 
-    def adopt(self, name, node, ends, step=None):
+    def add_loose(self, ends):
+        # modem_ends() whose host end no node of the World reads: a node in
+        # another process (acomm bench footprint) exchanges its bytes in a
+        # task; the World runs the modem as it does a node's
+        self._loose.append(ends)
+        return ends
+
+    def adopt(self, name, node, ends, step=None, events=None):
         # a node built elsewhere joins the World: ends[i] = modem_ends() of
-        # its i-th link (in node.links order); step(now) replaces node.step
+        # its i-th link (in node.links order); step(now) replaces node.step;
+        # events: the list its listener fills, if the caller keeps one
         names = list(node.links)
         emu, host, dev = ends[0]
         sn = SimNode(name, node, node.links[names[0]].driver, emu, host, dev, None)
@@ -201,7 +228,8 @@ class World:
                 node.names.add(other.name, other.node.node_id)
             if other.node.names.id_of(name) is None:
                 other.node.names.add(name, node.node_id)
-        sn.events = []
+        if events is not None:
+            sn.events = events
         self.nodes[name] = sn
         self._order.append(sn)
         return sn
@@ -270,23 +298,18 @@ class World:
                 self.node_steps += 1
             else:
                 self.node_skips += 1
-            dev = sn.modem_end
-            if dev.any():
-                sn.emu.feed(now, dev.read())
-            sn.emu.poll(now)
+            _modem_in(now, sn.emu, sn.modem_end)
             for x in sn.extra:
-                if x[4].any():
-                    x[2].feed(now, x[4].read())
-                x[2].poll(now)
+                _modem_in(now, x[2], x[4])
+        for e in self._loose:
+            _modem_in(now, e[0], e[2])
         ch.poll(now)
         for sn in self._order:
-            out = sn.emu.take_output()
-            if out:
-                sn.modem_end.write(out)
+            _modem_out(sn.emu, sn.modem_end)
             for x in sn.extra:
-                out = x[2].take_output()
-                if out:
-                    x[4].write(out)
+                _modem_out(x[2], x[4])
+        for e in self._loose:
+            _modem_out(e[0], e[2])
         self.clock.advance(self.step_ms)
         self.steps += 1
 
@@ -307,15 +330,16 @@ class World:
             w = sn.wake
             if w is None:
                 return None
-            for emu, ends in [(sn.emu, (sn.host_end, sn.modem_end))] + [(x[2], (x[3], x[4])) for x in sn.extra]:
-                idle = getattr(emu, "idle", None)
-                if idle is None or not idle(now):
+            if not _modem_quiet(now, sn.emu, sn.host_end, sn.modem_end):
+                return None
+            for x in sn.extra:
+                if not _modem_quiet(now, x[2], x[3], x[4]):
                     return None
-                for end in ends:
-                    if end.any() or end.in_flight():
-                        return None
             if first is None or ticks_diff(w, first) < 0:
                 first = w
+        for e in self._loose:
+            if not _modem_quiet(now, e[0], e[1], e[2]):
+                return None
         return first
 
     def run(self, ms, until=None):
