@@ -31,7 +31,6 @@
 
 from . import segment as sg
 from .arq import Outgoing
-from .compress import compress
 from .compat import const, ticks_add, ticks_diff
 from .errors import AcommError, StoreFull
 from .events import DELIVERED, EV_PACKET_STATUS, EXPIRED, FAILED, QUEUED, TRANSMITTED
@@ -127,7 +126,12 @@ class Transport(Receiving):
         p.out = p.link = p.hop = p.timer = p.polled = p.wait = p.group = None
         p.inflight = p.polling = p.misses = p.chunks = 0
         p.relayed = origin != self.node.node_id
-        if not compressed and self.compress and len(body) > 16:
+        # only the origin compresses: a relay forwards the body as the
+        # origin chose it (a second try would not shrink it and costs a
+        # relay its compression tables, 2.5 KiB, on every packet)
+        if not compressed and not p.relayed and self.compress and len(body) > 16:
+            from .compress import compress  # loaded by the first packet of its own
+
             z = compress(body)
             if len(z) < len(body):
                 p.body, p.compressed = z, True

@@ -45,6 +45,24 @@ def test_relay_over_two_hops_stores_and_forwards():
     assert c.node.transport.stats["relayed"] == 1 and not packets(c)
 
 
+def test_a_relay_forwards_the_body_as_the_origin_chose_it():
+    # compressed by the origin: the relay forwards it compressed, without
+    # decompressing; not compressed by the origin (compress=False): the
+    # relay does not try, so it sends as many fragments as the origin did
+    text = b"".join(b"t%02d depth %4.1fm air %3d ok\n" % (k, 8 + k * 0.4, 200 - k) for k in range(20))
+    for origin_compresses in (True, False):
+        w, a, b, c, ta = net(relay=True)
+        ta.compress = origin_compresses
+        tc = c.node.transport
+        pid = ta.send(w.now(), "buoy", text, 3600, 5)
+        assert w.run(1200000, until=lambda: packets(b))
+        assert packets(b)[0][3] == text and statuses(a, pid)[-1] == TRANSMITTED
+        assert tc.stats["relayed"] == 1 and tc.stats["rx_bad"] == 0
+        assert tc.stats["fragments"] == ta.stats["fragments"]
+        if not origin_compresses:
+            assert ta.stats["fragments"] > len(text) // 30  # the whole text went, uncompressed
+
+
 def test_an_urgent_packet_overtakes_a_long_one_on_the_other_lane():
     w, a, b, _, ta = net()
     big = ta.send(w.now(), "buoy", Prng(3).bytes(1500), 3600, 12)
