@@ -4,7 +4,13 @@
 # drivers, transport, store), not the emulators or the other nodes, so
 # `-X heapsize=` finds the board's own smallest heap.
 #
-#   micropython -X heapsize=24wk tools/board_lockstep.py /path/config.py /tmp/store
+#   micropython -X heapsize=24wk tools/board_lockstep.py /path/config.py /tmp/store [rom.img]
+#
+# With rom.img (a ROMFS image of the board's lib/, `mpremote romfs build`)
+# the modules are imported from a VfsRom mounted at /rom, so their bytecode
+# runs in place as it does from a board's ROMFS partition or frozen into
+# firmware. The unix port has no ROM partition: the image is read into one
+# bytearray first thing, and the caller subtracts its size from the heap.
 #
 # Protocol on stdin/stdout, binary, one exchange per simulated step:
 #   in:  b"T" now(4, big-endian) then per link: length(2) bytes
@@ -13,39 +19,91 @@
 import gc
 import sys
 
-from acomm_mp.assemble import build
-from acomm_mp.boardconfig import check
+
+def _mount_rom(path):
+    # one allocation the size of the image, made before anything else so it
+    # sits whole at the start of the heap, as a flash partition would
+    import os
+    import vfs
+
+    img = bytearray(os.stat(path)[6])
+    with open(path, "rb") as f:
+        f.readinto(img)
+    vfs.mount(vfs.VfsRom(img), "/rom")
+    sys.path.insert(0, "/rom")
+    return img
 
 
-class _Port:
-    # the board's side of one UART: bytes from the modem wait in `rx`
-    def __init__(self):
-        self.rx = b""
-        self.tx = bytearray()
+_ROM = _mount_rom(sys.argv[3]) if len(sys.argv) > 3 else None
+
+from acomm_mp import release  # noqa: E402
+from acomm_mp.assemble import build  # noqa: E402
+
+
+class _Uart:
+    # machine.UART as a board has it, behind the port's own UartStream: the
+    # receive ring acomm_mp.start asks for (the link's rxbuf) and the
+    # RP2040 port's default 256-byte transmit buffer, both on the heap
+    # as on the board and allocated once, so the harness allocates nothing
+    # per step. Bytes beyond a full ring are lost, as in an overrun; a full
+    # transmit buffer takes part of a write (the node keeps the rest).
+    def __init__(self, rxbuf=1024, txbuf=256):
+        self.rx = bytearray(rxbuf)
+        self.rmv = memoryview(self.rx)
+        self.head = 0
+        self.count = 0
+        self.tx = bytearray(txbuf)
+        self.tmv = memoryview(self.tx)
+        self.tn = 0
+        self.overruns = 0
 
     def any(self):
-        return len(self.rx)
+        return self.count
 
-    def read(self, n=256):
-        if not self.rx:
-            return None
-        d = self.rx[:n]
-        self.rx = self.rx[n:]
-        return d
+    def readinto(self, buf):
+        size = len(self.rx)
+        n = min(len(buf), self.count)
+        first = min(n, size - self.head)
+        buf[:first] = self.rmv[self.head : self.head + first]
+        if n > first:
+            buf[first:n] = self.rmv[: n - first]
+        self.head = (self.head + n) % size
+        self.count -= n
+        return n
 
-    def write(self, b):
-        self.tx.extend(b)
-        return len(b)
+    def write(self, data):
+        n = min(len(data), len(self.tx) - self.tn)
+        self.tmv[self.tn : self.tn + n] = memoryview(data)[:n]
+        self.tn += n
+        return n
+
+    def fill(self, inp, n):
+        # n bytes from the ocean process into the ring
+        size = len(self.rx)
+        while n:
+            tail = (self.head + self.count) % size
+            k = min(n, size - self.count, size - tail)
+            if k:
+                _read_into(inp, self.rmv[tail : tail + k])
+                self.count += k
+            else:
+                k = min(n, len(_SCRATCH))
+                _read_into(inp, memoryview(_SCRATCH)[:k])
+                self.overruns += k
+            n -= k
 
 
-def _read(inp, n):
-    b = inp.read(n)
-    while len(b) < n:
-        more = inp.read(n - len(b))
-        if not more:
+_SCRATCH = bytearray(64)
+_HDR = bytearray(5)
+
+
+def _read_into(inp, mv):
+    got = 0
+    while got < len(mv):
+        k = inp.readinto(mv[got:])
+        if not k:
             raise SystemExit(3)
-        b += more
-    return b
+        got += k
 
 
 def _store(path):
@@ -62,10 +120,15 @@ def main(path, store_path):
     g = {}
     with open(path) as f:
         exec(f.read(), g)
+    from acomm_mp.boardconfig import check
+
     cfg = check(g["CONFIG"])
+    check = None
+    release("acomm_mp.boardconfig")  # as start() does
     # every module the board runs, loaded before the node exists: what is
-    # allocated then is mostly bytecode, which firmware with the modules
-    # frozen in (ports/micropython/manifest.py) keeps in flash instead
+    # allocated then is mostly bytecode, which a ROMFS partition or firmware
+    # with the modules frozen in (ports/micropython/manifest.py) keeps in
+    # flash instead
     from acomm_mp.modems import driver_class
 
     for lk in cfg["links"]:
@@ -75,12 +138,14 @@ def main(path, store_path):
 
     gc.collect()
     code = gc.mem_alloc()
+    from acomm_mp.uartstream import UartStream
+
     ports = []
 
     def open_uart(lk):
-        p = _Port()
-        ports.append(p)
-        return p
+        u = _Uart(lk["rxbuf"])
+        ports.append(u)
+        return UartStream(u)
 
     clock = [0]
     board = build(cfg, open_uart, lambda: clock[0], lambda: 1000000 + clock[0] // 1000, _store(store_path),
@@ -90,26 +155,27 @@ def main(path, store_path):
     peak = base
     inp = sys.stdin.buffer
     out = sys.stdout.buffer
+    hdr = memoryview(_HDR)
     while True:
-        kind = _read(inp, 1)
-        if kind == b"Q":
+        _read_into(inp, hdr[:1])
+        if _HDR[0] == ord("Q"):
             break
-        now = int.from_bytes(_read(inp, 4), "big")
+        _read_into(inp, hdr[:4])
+        now = int.from_bytes(_HDR[:4], "big")
         clock[0] = now
-        for p in ports:
-            n = int.from_bytes(_read(inp, 2), "big")
-            if n:
-                p.rx += _read(inp, n)
+        for u in ports:
+            _read_into(inp, hdr[:2])
+            u.fill(inp, (_HDR[0] << 8) | _HDR[1])
         board.tick(now)
         a = gc.mem_alloc()
         if a > peak:
             peak = a
-        reply = bytearray()
-        for p in ports:
-            reply.extend(len(p.tx).to_bytes(2, "big"))
-            reply.extend(p.tx)
-            p.tx = bytearray()
-        out.write(reply)
+        for u in ports:
+            _HDR[0] = u.tn >> 8
+            _HDR[1] = u.tn & 0xFF
+            out.write(hdr[:2])
+            out.write(u.tmv[: u.tn])
+            u.tn = 0
         out.flush()
     st = board.stats
     tx = rx = 0
@@ -117,8 +183,9 @@ def main(path, store_path):
         s = board.node.links[name].stats
         tx += s.get("tx_frames", 0)
         rx += s.get("rx_frames", 0)
-    print('{"peak": %d, "after_build": %d, "code": %d, "oom": %d, "errors": %d, "tx_frames": %d, "rx_frames": %d, "relayed": %d}'
-          % (peak, base, code, st["oom"], st["errors"], tx, rx, board.transport.stats["relayed"]))
+    print('{"peak": %d, "after_build": %d, "code": %d, "oom": %d, "errors": %d, "tx_frames": %d, "rx_frames": %d, "relayed": %d, "rom": %d, "overruns": %d}'
+          % (peak, base, code, st["oom"], st["errors"], tx, rx, board.transport.stats["relayed"], len(_ROM) if _ROM else 0,
+             sum(u.overruns for u in ports)))
 
 
 main(sys.argv[1], sys.argv[2])

@@ -3,6 +3,9 @@
 # stages, stepped with a simulated ocean in this process. A roomy heap
 # completes the minute with frames both ways and the diver's packet in the
 # buoy's custody; a heap far too small is reported as a failure, not hidden.
+# From a ROMFS image the same minute runs with the bytecode in place: the
+# imports take less heap than from .mpy files, and the image is not counted.
+import os
 import shutil
 import tempfile
 
@@ -17,5 +20,20 @@ def test_the_lockstep_minute_runs_and_a_tiny_heap_fails():
         assert r is not None and r["relayed"] == 1 and r["tx_frames"] > 0 and r["rx_frames"] > 0
         assert r["after_build"] < r["peak"] < 2 * 256 * 1024
         assert fw.run_once(fl, 16 * 1024) is None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def test_from_a_romfs_image_the_imports_take_less_heap():
+    tmp = tempfile.mkdtemp(prefix="acomm-fp-test-")
+    try:
+        fl = fw._stage(tmp)
+        rom = fw.build_romfs(os.path.join(fl, "lib"), os.path.join(tmp, "rom.img"))
+        files = fw.run_once(fl, 256 * 1024)
+        r = fw.run_once(fl, 256 * 1024, rom=rom)
+        assert r is not None and r["relayed"] == 1 and r["rom"] == os.path.getsize(rom)
+        code_rom = (r["code"] - r["rom"]) // 2
+        # the bytecode stays in the image: well under what loading took
+        assert 0 < code_rom < 0.7 * (files["code"] // 2)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -12,14 +12,28 @@
 #
 #   heap_min_bytes    the smallest -X heapsize=Nw (N bytes of a 32-bit
 #                     board's heap) under which the minute completes with
-#                     no MemoryError and frames flowing; found by bisection
-#                     to 256 bytes
+#                     no MemoryError and frames flowing, nor with the next
+#                     two sizes up; found by bisection to 256 bytes. In
+#                     32-bit terms, as MicroPython's `w` suffix scales them:
+#                     objects of pointers count as on a 32-bit board, byte
+#                     buffers (UART rings, line buffers, tables) at half
+#                     their size, so a 32-bit board needs somewhat more;
+#                     the harness's UART stand-ins are on the heap as
+#                     machine.UART's are
 #   heap_peak_bytes   gc.mem_alloc() at its highest, at a roomy heap, in
 #                     32-bit terms (the unix port is 64-bit: halved)
-#   heap_peak_without_code_bytes   the peak less what the loaded modules
-#                     take (bytecode; in flash when the modules are frozen
-#                     into firmware): an estimate, not a measured run;
-#                     heap_min_without_code_bytes the same for heap_min
+#   heap_min_romfs_bytes   the same with the modules imported from a ROMFS
+#                     image (tools/board_lockstep.py mounts it as a VfsRom):
+#                     the bytecode runs in place, as on a board with a ROMFS
+#                     partition (`mpremote romfs deploy`); what stays in RAM
+#                     is the modules' objects (functions, classes, dicts,
+#                     interned names) and the node. Frozen firmware keeps a
+#                     little more in flash than ROMFS does (the raw code
+#                     descriptors and the name table), so it needs at most
+#                     this. heap_after_start_romfs_bytes and
+#                     heap_code_romfs_bytes: the heap after the node is
+#                     built, and what the imports alone took
+#   romfs_image_bytes the ROM partition the board's modules take (armv6m)
 #   mpy_total_bytes   the precompiled modules copied to the board (armv6m)
 import json
 import os
@@ -82,8 +96,35 @@ class _Lockstep:
         return b
 
 
-def run_once(flash_dir, heap, seed=1):
-    # -> the board's JSON figures, or None when it failed at this heap
+def build_romfs(lib_dir, out):
+    # a ROMFS image of the board's lib/ (.mpy already compiled), as
+    # `mpremote romfs deploy` would write to the board's ROM partition
+    r = subprocess.run([_mpremote(), "romfs", "--no-mpy", "-o", out, "build", lib_dir],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    if r.returncode != 0 or not os.path.exists(out):
+        raise RuntimeError("mpremote romfs build failed: %s" % r.stdout.decode(errors="replace")[-400:])
+    return out
+
+
+def _mpremote():
+    import sys
+
+    exe = os.path.join(os.path.dirname(sys.executable), "mpremote")
+    return exe if os.path.exists(exe) else (shutil.which("mpremote") or "mpremote")
+
+
+def _heap_flag(heap, rom):
+    # heap: bytes of a 32-bit board. The unix port is 64-bit, so objects
+    # take twice the room; the ROM image is raw bytes and is added as it is,
+    # with its share of the GC's allocation tables (3 bits per 32-byte block)
+    if not rom:
+        return "heapsize=%dw" % heap
+    return "heapsize=%d" % (2 * heap + rom + rom * 3 // 256 + 64)
+
+
+def run_once(flash_dir, heap, seed=1, rom=None):
+    # -> the board's JSON figures, or None when it failed at this heap.
+    # rom: a ROMFS image of flash_dir/lib to import the modules from
     cfg = boardfiles.load_config(flash_dir)
     w = World(seed=seed)
     ends = [w.add_loose(w.modem_ends(lk["modem"], lk["address"], fast_options(lk["modem"])[1],
@@ -93,9 +134,10 @@ def run_once(flash_dir, heap, seed=1):
     others = add_peers(w, cfg, PEERS, VIA, wall)
     tmp = tempfile.mkdtemp(prefix="acomm-footprint-store-")
     env = dict(os.environ)
-    env["MICROPYPATH"] = ".frozen:" + os.path.join(flash_dir, "lib")
-    proc = subprocess.Popen([_mp(), "-X", "heapsize=%dw" % heap, boardfiles.repo_root() + "/tools/board_lockstep.py",
-                             os.path.join(flash_dir, "config.py"), os.path.join(tmp, "store")],
+    env["MICROPYPATH"] = ".frozen" if rom else ".frozen:" + os.path.join(flash_dir, "lib")
+    args = [_mp(), "-X", _heap_flag(heap, rom and os.path.getsize(rom)), boardfiles.repo_root() + "/tools/board_lockstep.py",
+            os.path.join(flash_dir, "config.py"), os.path.join(tmp, "store")]
+    proc = subprocess.Popen(args + ([rom] if rom else []),
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
     w.add_task(_Lockstep(proc, [e[1] for e in ends]))
     try:
@@ -114,9 +156,29 @@ def run_once(flash_dir, heap, seed=1):
     if proc.returncode != 0:
         return None
     r = json.loads(out.decode().strip().splitlines()[-1])
-    if r["oom"] or r["errors"] or not r["tx_frames"] or not r["rx_frames"] or r["relayed"] != 1:
+    if r["oom"] or r["errors"] or r["overruns"] or not r["tx_frames"] or not r["rx_frames"] or r["relayed"] != 1:
         return None
     return r
+
+
+def _heap_min(flash_dir, rom=None):
+    # bisection to 256 bytes (lo fails, too small to start; hi works), then
+    # up until three sizes in a row work: near the edge the outcome depends
+    # on where fragments fall, so one lucky size is not the figure
+    lo, hi = 4096, 256 * 1024
+    while hi - lo > 256:
+        mid = (lo + hi) // 2 // 256 * 256
+        if run_once(flash_dir, mid, rom=rom) is None:
+            lo = mid
+        else:
+            hi = mid
+    k = 1
+    while k < 3:
+        if run_once(flash_dir, hi + 256 * k, rom=rom) is None:
+            hi += 256 * (k + 1)
+            k = 0
+        k += 1
+    return hi
 
 
 def run(emit):
@@ -128,21 +190,23 @@ def run(emit):
         roomy = run_once(fl, 256 * 1024)
         if roomy is None:
             raise RuntimeError("the buoy's minute failed even on a 256 KiB heap")
-        lo, hi = 4096, 256 * 1024  # lo fails (too small to start), hi works
-        while hi - lo > 256:
-            mid = (lo + hi) // 2 // 256 * 256
-            if run_once(fl, mid) is None:
-                lo = mid
-            else:
-                hi = mid
-        emit("heap_min_bytes", hi, "bytes")
+        emit("heap_min_bytes", _heap_min(fl), "bytes")
         emit("heap_peak_bytes", roomy["peak"] // 2, "bytes")
         emit("heap_after_start_bytes", roomy["after_build"] // 2, "bytes")
-        # the part of the peak that is not module code: an estimate of what
-        # a board with acomm frozen into its firmware needs
-        emit("heap_peak_without_code_bytes", (roomy["peak"] - roomy["code"]) // 2, "bytes")
-        emit("heap_min_without_code_bytes", hi - roomy["code"] // 2, "bytes")
-        emit("mpy_total_bytes", boardfiles.mpy_total_bytes(boardfiles.board_path(BOARD), stage_dir=os.path.join(tmp, "arm")),
+        # the same minute with the modules in a ROMFS image: bytecode runs
+        # in place, as from a board's ROM partition or frozen firmware
+        rom = build_romfs(os.path.join(fl, "lib"), os.path.join(tmp, "rom.img"))
+        roomy = run_once(fl, 256 * 1024, rom=rom)
+        if roomy is None:
+            raise RuntimeError("the buoy's minute failed from ROMFS even on a 256 KiB heap")
+        emit("heap_min_romfs_bytes", _heap_min(fl, rom), "bytes")
+        emit("heap_after_start_romfs_bytes", (roomy["after_build"] - roomy["rom"]) // 2, "bytes")
+        emit("heap_code_romfs_bytes", (roomy["code"] - roomy["rom"]) // 2, "bytes")
+        arm = os.path.join(tmp, "arm")
+        emit("mpy_total_bytes", boardfiles.mpy_total_bytes(boardfiles.board_path(BOARD), stage_dir=arm), "bytes")
+        # the ROM partition the board needs: its modules for armv6m, as
+        # mpy_total_bytes just compiled them into arm/lib
+        emit("romfs_image_bytes", os.path.getsize(build_romfs(os.path.join(arm, "lib"), os.path.join(tmp, "arm.img"))),
              "bytes")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
