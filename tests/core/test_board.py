@@ -211,7 +211,24 @@ def test_machine_uart_is_normalised():
     lk = check(_config("buoy_pico"))["links"][1]
     s = mpstart.open_uart(_Machine, lk)
     assert s.uart.uid == 1 and s.uart.kw["baudrate"] == 19200 and s.uart.kw["tx"].n == 4
+    assert lk["rxbuf"] == 256  # 100 ms at 19200 baud is less: the floor
+    assert check(_config("buoy_pico"))["links"][0]["rxbuf"] == 1152  # SeaTrac, 115200 baud
     assert s.read(2) == b"\x01\x02" and s.read(64) == b"\x03"
     assert s.read(64) is None  # nothing waiting: None, never a blocking read
     assert s.write(b"abcdef") == 2 and s.write(b"a") == 0  # a timeout counts as nothing written
     assert s.bytes_in == 3 and s.bytes_out == 2
+
+
+def test_a_module_released_after_boot_leaves_and_loads_again():
+    import sys
+
+    import acomm_mp
+    from acomm_mp import release
+
+    import acomm_mp.uartstream  # noqa: F401
+
+    release("acomm_mp.uartstream")
+    assert "acomm_mp.uartstream" not in sys.modules and "uartstream" not in acomm_mp.__dict__
+    from acomm_mp.uartstream import UartStream
+
+    assert UartStream is not None and "acomm_mp.uartstream" in sys.modules

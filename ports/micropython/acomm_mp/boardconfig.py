@@ -93,6 +93,10 @@ def _link(i, lk, node_id, names):
     out["modem"] = modem
     out["uart"] = _int(lk, "uart", 0, 9, f + ".uart")
     out["baud"] = _int(lk, "baud", 300, 4000000, f + ".baud")
+    # the UART's receive ring: by default 100 ms of the line at full speed
+    # (the loop's longest pause is a flash write), at least 256 bytes: 1152
+    # for a SeaTrac at 115200 baud, 256 for an Iridium modem at 19200
+    out["rxbuf"] = _int(lk, "rxbuf", 64, 65536, f + ".rxbuf", max(256, out["baud"] // 100))
     out["tx"] = _pin(lk, "tx", f + ".tx")
     out["rx"] = _pin(lk, "rx", f + ".rx")
     out["address"] = _int(lk, "address", 0, 255, f + ".address", node_id)

@@ -12,8 +12,8 @@ import time
 from acomm.compat import ticks_ms
 from acomm.store import Store
 
+from . import release
 from .assemble import build
-from .boardconfig import check
 from .uartstream import UartStream
 
 
@@ -24,9 +24,9 @@ def open_uart(machine, lk):
     if lk["rx"] is not None:
         kw["rx"] = machine.Pin(lk["rx"])
     try:
-        # a bigger receive ring: a SeaTrac status burst arrives while the
-        # loop is busy elsewhere
-        u = machine.UART(lk["uart"], rxbuf=1024, **kw)
+        # a receive ring sized for the line (acomm_mp.boardconfig): a
+        # SeaTrac status burst arrives while the loop is busy elsewhere
+        u = machine.UART(lk["uart"], rxbuf=lk["rxbuf"], **kw)
     except (TypeError, ValueError):
         u = machine.UART(lk["uart"], **kw)
     return UartStream(u)
@@ -52,7 +52,11 @@ def open_store(st):
 
 
 def start(config, make_report=None, machine=None):
+    from .boardconfig import check
+
     cfg = check(config)
+    check = None
+    release("acomm_mp.boardconfig")  # needed once: 1.4 KiB back to the heap
     if machine is None:
         import machine
     board = build(cfg, lambda lk: open_uart(machine, lk), ticks_ms, lambda: int(time.time()), open_store,
