@@ -122,6 +122,7 @@ class Reassembly:
         self.touched = now
         self.done_pid = None  # set once complete: the packet id we confirmed
         self._base = 0  # fragments 0.._base-1 have all arrived
+        self.unauthed = False  # a fragment came without a valid tag (acomm.auth)
 
     def add(self, index, payload, now):
         # Raises DecodeError for a fragment that contradicts the packet.

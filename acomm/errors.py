@@ -35,3 +35,9 @@ class StoreFull(StoreError):
     # put() would take the store past its capacity even after compaction.
     # The caller refuses the new packet; nothing already stored is dropped.
     pass
+
+
+class AuthError(DecodeError):
+    # A frame whose authentication tag does not verify, or whose counter was
+    # already seen (a replay): dropped like any damaged frame, and counted.
+    pass

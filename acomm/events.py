@@ -72,7 +72,8 @@ EV_AVAILABILITY = const(22)
 EV_CAPS = const(23)
 EV_RANGE_RECEIVED = const(24)
 # Link -> transport (the node hands these to its transport, not to the
-# application): (EV_SEGMENT, link, src_id, dst_id or None, head, payload),
+# application): (EV_SEGMENT, link, src_id, dst_id or None, head, payload,
+# authed),
 # head: the frame header's sequence field (acomm.segment)
 EV_SEGMENT = const(25)
 # Transport -> application:
@@ -80,3 +81,7 @@ EV_SEGMENT = const(25)
 #   (EV_PACKET, src_name, dst_name, data)     a whole packet arrived
 EV_PACKET_STATUS = const(26)
 EV_PACKET = const(27)
+# when the node has a key (acomm.auth) and a frame or packet without a valid
+# tag holds a command (acomm.authguard): (EV_REFUSED, link or None,
+# src_name, reason); the command is not passed on
+EV_REFUSED = const(28)

@@ -58,9 +58,10 @@ _X_FLAGS = const(0x80)
 
 
 class Frame:
-    __slots__ = ("ftype", "src", "dst", "seq", "flags", "payload")
+    __slots__ = ("ftype", "src", "dst", "seq", "flags", "payload", "authed")
 
     def __init__(self, ftype, src, dst, seq, payload=b"", flags=0):
+        self.authed = False  # set by the link when its tag verified (acomm.auth)
         self.ftype = ftype
         self.src = src
         self.dst = dst

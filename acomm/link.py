@@ -39,6 +39,7 @@ from .events import (
     EV_DRIVER_UP,
     EV_RANGE,
     EV_RECEIVED,
+    EV_REFUSED,
     EV_SEGMENT,
     EV_REPLIED,
     EV_RX,
@@ -120,6 +121,8 @@ class Link(Ranging):
         self.modem_acks = self.elided and driver.caps.has(CAP_RELIABLE)
         self.framing = LinkFraming(node_id, self.elided, self.addr_map, driver.caps.mtu_tx, not self.modem_acks, fec)
         self.seq_mod = self.framing.seq_mod
+        # acomm.authguard.Guard when the node has a key (Node.set_auth)
+        self.guard = None
         self.max_retries = max_retries
         self.dup_window_ms = dup_window_ms
         self.overhear = overhear
@@ -141,6 +144,7 @@ class Link(Ranging):
             "rx_bad": 0,
             "rx_not_for_us": 0,
             "rx_duplicates": 0,
+            "refused": 0,
             "adverts_sent": 0,
             "acks_sent": 0,
             "retries": 0,
@@ -534,7 +538,7 @@ class Link(Ranging):
         if f.ftype == fr.SEGMENT:
             # the transport's: it numbers and acknowledges its own fragments
             if mine:
-                self._emit((EV_SEGMENT, self, src, dst, f.seq, f.payload))
+                self._emit((EV_SEGMENT, self, src, dst, f.seq, f.payload, f.authed))
             return
         data = f.ftype == fr.DATA or f.ftype == fr.REPLY
         if not mine:
@@ -567,6 +571,14 @@ class Link(Ranging):
         if self._dups.seen(key, f.seq, now):
             self.stats["rx_duplicates"] += 1
             return
+        if self.guard is not None and self.guard.is_command(f.payload):
+            if not f.authed:
+                self.stats["refused"] += 1
+                self._emit((EV_REFUSED, self, self.names.name_of(src), "command without a valid authentication tag"))
+                return
+            # its counter goes to flash before the command is carried out,
+            # so a restart cannot make a recording of it fresh again
+            self.framing.auth.commit()
         self._emit(
             (
                 EV_RECEIVED,

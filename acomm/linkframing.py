@@ -16,9 +16,17 @@
 # drop damaged ones before acomm sees them. A codeword is at most 255
 # bytes, so the frame's MTU shrinks to 255 - fec when it was larger. Both
 # ends of a link must use the same fec.
+#
+# With an acomm.auth.Auth (set_auth; the node gives every link the same
+# one), each frame is sealed with a counter and a tag (F_AUTH set, which on
+# an elided link costs the flags byte), and a received frame that carries
+# F_AUTH is opened: a wrong tag or a replayed counter raises AuthError, and
+# a frame that verifies is marked authed. Frames without F_AUTH pass as
+# they are, unauthenticated: what may not be done on their word is decided
+# above (acomm.authguard).
 
 from . import frame as fr
-from .errors import DecodeError
+from .errors import AuthError, DecodeError
 
 
 class LinkFraming:
@@ -43,20 +51,33 @@ class LinkFraming:
         self.fec = fec
         self._mtu = mtu
         self._buf = bytearray(mtu + fr.RAW_OVERHEAD_WIDE)
+        self._plain_overhead = self.worst_overhead
+        self.auth = None
+
+    def set_auth(self, auth):
+        self.auth = auth
+        self.worst_overhead = self._plain_overhead
+        if auth is not None:
+            # the counter and tag, and on an elided link the flags byte
+            self.worst_overhead += auth.overhead + (0 if (not self.elided or self.link_acks) else 1)
 
     def mtu_for(self, dst_id):
         # payload bytes one frame to dst_id can carry
         if self.elided:
             return self._mtu - self.worst_overhead
-        return self._mtu - self.fec - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
+        a = 0 if self.auth is None else self.auth.overhead
+        return self._mtu - self.fec - a - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
 
     def encode(self, ftype, dst_id, seq, payload, flags=0):
         # -> (interface address or None, frame bytes). On an elided link
         # whose modem acknowledges, the modem is asked for what the flags
         # mean and they stay off the air.
         buf = self._buf
+        if self.auth is not None:
+            payload = self.auth.seal(ftype, self.node_id, dst_id, payload)
+            flags |= fr.F_AUTH
         if self.elided:
-            n = fr.encode_elided_into(buf, ftype, seq, payload, flags if self.link_acks else 0)
+            n = fr.encode_elided_into(buf, ftype, seq, payload, flags if self.link_acks else flags & fr.F_AUTH)
             addr = self.addr_map.broadcast if dst_id is None else self.addr_map.addr_of(dst_id)
         else:
             d = fr.BROADCAST if dst_id is None else dst_id
@@ -76,11 +97,17 @@ class LinkFraming:
             self.corrected += n
         if not self.elided:
             f = fr.decode_raw(data)
-            return f, f.src, (None if f.dst == fr.BROADCAST else f.dst)
-        am = self.addr_map
-        src = am.id_of(src_addr)
-        dst = None if (dst_addr is None or dst_addr == am.broadcast) else am.id_of(dst_addr)
-        f = fr.decode_elided(data, src, dst)
-        if src is None:
-            raise DecodeError("frame from unmapped address %r" % (src_addr,))
+            src, dst = f.src, (None if f.dst == fr.BROADCAST else f.dst)
+        else:
+            am = self.addr_map
+            src = am.id_of(src_addr)
+            dst = None if (dst_addr is None or dst_addr == am.broadcast) else am.id_of(dst_addr)
+            f = fr.decode_elided(data, src, dst)
+            if src is None:
+                raise DecodeError("frame from unmapped address %r" % (src_addr,))
+        if f.flags & fr.F_AUTH:
+            if self.auth is None:
+                raise AuthError("authenticated frame, and this node has no key")
+            f.payload = self.auth.open(f.ftype, src, dst, f.payload)[0]
+            f.authed = True
         return f, src, dst

@@ -34,6 +34,8 @@ class Node:
         self._pumps = {}  # link name -> the frame port's pump, or None
         self._unsent = {}  # link name -> bytes a short write left behind
         self._req_id = 0
+        self.auth = None  # acomm.auth.Auth: set_auth()
+        self.guard = None
         # Without a listener, events wait here for the application to take
         # them; bounded: the oldest are dropped (and counted) beyond the cap.
         self.backlog = []
@@ -43,8 +45,27 @@ class Node:
         self.transport = None
         self._now = 0
 
+    def set_auth(self, auth, guard=None):
+        # A network key for every link, present and future (acomm.auth),
+        # and what needs it (acomm.authguard; by default the seed
+        # catalogs' commands). None removes both.
+        if auth is not None and guard is None:
+            from .authguard import commands
+
+            guard = commands()
+        self.auth = auth
+        self.guard = guard if auth is not None else None
+        for name in self.links:
+            self._secure(self.links[name])
+
+    def _secure(self, link):
+        link.framing.set_auth(self.auth)
+        link.guard = self.guard
+
     def add_link(self, name, driver, stream=None, **options):
         link = Link(name, driver, self.node_id, self.names, self._on_event, **options)
+        if self.auth is not None:
+            self._secure(link)
         self.links[name] = link
         self._streams[name] = stream
         self._pumps[name] = getattr(stream, "pump", None) if stream is not None else None
@@ -63,7 +84,7 @@ class Node:
         if t is not None:
             code = ev[0]
             if code == EV_SEGMENT:
-                t.on_segment(self._now, ev[1], ev[2], ev[3], ev[4], ev[5])
+                t.on_segment(self._now, ev[1], ev[2], ev[3], ev[4], ev[5], ev[6])
                 return
             if code == EV_STATUS and t.on_link_status(self._now, ev[2], ev[3], ev[4]):
                 return

@@ -73,7 +73,7 @@ class Transport(Receiving):
         self._reqs = {}  # link request id -> (packet or None once abandoned, fragment index, poll flag)
         self._rtt = {}  # (link name, hop id) -> [smoothed poll-to-SACK time, its mean deviation], ms
         self.stats = {"sent": 0, "delivered": 0, "expired": 0, "failed": 0, "received": 0, "relayed": 0,
-                      "fragments": 0, "resent": 0, "sacks": 0, "rx_bad": 0, "rx_dup": 0, "refused": 0,
+                      "fragments": 0, "resent": 0, "sacks": 0, "rx_bad": 0, "rx_dup": 0, "refused": 0, "refused_unauthed": 0,
                       "store_full": 0, "failovers": 0}
         Receiving.__init__(self)
         node.transport = self

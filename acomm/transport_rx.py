@@ -13,7 +13,7 @@ from . import segment as sg
 from .arq import Reassembly
 from .compat import const, ticks_diff
 from .errors import DecodeError
-from .events import EV_PACKET, FAILED, TRANSMITTED
+from .events import EV_PACKET, EV_REFUSED, FAILED, TRANSMITTED
 from .frame import SEGMENT
 
 _SACK_PRIORITY = const(2)
@@ -37,7 +37,7 @@ class Receiving:
         for k in [k for k in self._rx if ticks_diff(now, self._rx[k].touched) > _RX_TIMEOUT_MS]:
             del self._rx[k]
 
-    def on_segment(self, now, link, src, dst, head, payload):
+    def on_segment(self, now, link, src, dst, head, payload, authed=False):
         try:
             s = sg.decode(head, payload)
         except DecodeError:
@@ -58,6 +58,8 @@ class Receiving:
                 return
             r = self._rx[key] = Reassembly(s.gen, self.max_packet + 16, now)
         index = r.index_of(s.index)
+        if not authed:
+            r.unauthed = True  # the packet is as trusted as its weakest fragment
         try:
             first = r.header is None
             r.add(index, s.payload, now)
@@ -135,8 +137,17 @@ class Receiving:
                 except DecodeError:
                     return self._bad(r)
             self._remember(origin, h.pid)
-            self.stats["received"] += 1
             names = self.node.names
+            g = self.node.guard
+            if g is not None and g.is_command(data):
+                if r.unauthed:
+                    self.stats["refused_unauthed"] += 1
+                    self._emit((EV_REFUSED, None, names.name_of(origin), "command without a valid authentication tag"))
+                    r.done_pid = h.pid
+                    r.frags = {}
+                    return True
+                self.node.auth.commit()  # see Link: before it is carried out
+            self.stats["received"] += 1
             self._emit((EV_PACKET, names.name_of(origin), names.name_of(final), data))
         r.done_pid = h.pid
         r.frags = {}  # the memory goes; the lane remembers only the completion

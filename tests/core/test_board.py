@@ -232,3 +232,23 @@ def test_a_module_released_after_boot_leaves_and_loads_again():
     from acomm_mp.uartstream import UartStream
 
     assert UartStream is not None and "acomm_mp.uartstream" in sys.modules
+
+
+def test_a_network_key_in_the_config_secures_every_link_and_a_bad_one_is_refused():
+    key = "00112233445566778899aabbccddeeff"
+    c = _copy(_config("buoy_pico"))
+    c["auth"] = {"key": key, "tag_len": 6}
+    cfg = check(c)
+    board = build(cfg, lambda lk: FakeUART())
+    assert board.node.auth is not None and board.node.auth.overhead == 9
+    for name in board.node.links:
+        assert board.node.links[name].framing.auth is board.node.auth and board.node.links[name].guard is not None
+    assert check(_config("buoy_pico"))["auth"] is None  # no key: no auth
+    for bad in (key[:30], key + "00" * 49, "zz" * 16, 1234, None):
+        c["auth"] = {"key": bad}
+        e = _error(c)
+        assert "auth.key" in e and (not isinstance(bad, str) or bad not in e)  # named, never echoed
+    c["auth"] = {"key": key, "tag_len": 2}
+    assert "auth.tag_len" in _error(c)
+    c["auth"] = {"key": key, "tagl": 4}
+    assert "tagl" in _error(c)

@@ -44,3 +44,34 @@ def test_node_command_needs_a_link():
     p = _node("--name", "x", "--id", "1")
     _, err = p.communicate(timeout=10)
     assert p.returncode == 2 and "--udp" in err
+
+
+def test_two_nodes_with_the_same_key_file_talk_and_a_bad_key_file_is_named(tmp_path):
+    key = tmp_path / "net.key"
+    key.write_text("00112233445566778899aabbccddeeff\n")
+    srv = _node("--name", "topside", "--id", "1", "--tcp-listen", "127.0.0.1:0", "--seconds", "4",
+                "--key-file", str(key), "--auth-counters", str(tmp_path / "topside.ctr"))
+    cli = None
+    try:
+        port = srv.stdout.readline().strip().rsplit(":", 1)[1]
+        cli = _node("--name", "buoy", "--id", "2", "--known", "topside=1", "--tcp-connect", "127.0.0.1:" + port,
+                    "--send", "topside=sealed hello", "--seconds", "1.5", "--key-file", str(key))
+        out, err = cli.communicate(timeout=10)
+        assert cli.returncode == 0 and "status tcp 1 delivered" in out, (out, err)
+        srv.terminate()
+        sout, _ = srv.communicate(timeout=10)
+        assert "received tcp node-2 -> topside: sealed hello" in sout, sout
+        assert (tmp_path / "topside.ctr").exists()  # the counters were written
+    finally:
+        for p in (srv, cli):
+            if p is not None and p.poll() is None:
+                p.kill()
+                p.wait()
+    for text, want in (("0011", "2 bytes"), ("not hex at all", "not hex"), (None, "No such file")):
+        path = tmp_path / ("k%d" % len(want))
+        if text is not None:
+            path.write_text(text)
+        p = _node("--name", "x", "--id", "1", "--udp", "127.0.0.1:0", "--key-file", str(path), "--seconds", "1")
+        _, err = p.communicate(timeout=10)
+        assert p.returncode == 2 and str(path) in err and want in err, err
+        assert text is None or text not in err or text == "not hex at all"

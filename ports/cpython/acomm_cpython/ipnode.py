@@ -10,7 +10,10 @@ import select
 import sys
 import time
 
-from acomm.events import AVAILABLE, AVAIL_NAMES, EV_AVAILABILITY, EV_RECEIVED, EV_STATUS, STATUS_NAMES, is_final
+from acomm.auth import Auth
+from acomm.errors import AcommError
+from acomm.events import (AVAILABLE, AVAIL_NAMES, EV_AVAILABILITY, EV_RECEIVED, EV_REFUSED, EV_STATUS, STATUS_NAMES,
+                          is_final)
 from acomm.link import BROADCAST
 from acomm.node import Node
 
@@ -49,6 +52,10 @@ def add_arguments(p):
     p.add_argument("--send", action="append", default=[], metavar="DST=TEXT", help="send at start")
     p.add_argument("--lifespan", type=float, default=30.0, metavar="S", help="lifespan of what is sent")
     p.add_argument("--seconds", type=float, help="stop after this long (default: at the end of standard input)")
+    p.add_argument("--key-file", metavar="PATH", help="the network key, 16 to 64 bytes as hex, in a file "
+                   "(never on the command line, where ps shows it): frames are sealed and commands need a tag")
+    p.add_argument("--tag-len", type=int, default=4, metavar="N", help="authentication tag bytes, 4..16 (default 4)")
+    p.add_argument("--auth-counters", metavar="PATH", help="file keeping the authentication counters across restarts")
 
 
 def _print_event(ev):
@@ -57,6 +64,8 @@ def _print_event(ev):
         line = "received %s %s -> %s: %s" % (ev[1].name, ev[2], ev[3], bytes(ev[4]).decode("utf-8", "replace"))
     elif code == EV_AVAILABILITY:
         line = "%s %s on %s" % (AVAIL_NAMES.get(ev[3], ev[3]), ev[2], ev[1].name)
+    elif code == EV_REFUSED:
+        line = "refused from %s: %s" % (ev[2], ev[3])
     elif code == EV_STATUS and is_final(ev[3]):
         line = "status %s %d %s%s" % (ev[1].name, ev[2], STATUS_NAMES[ev[3]], (": " + ev[4]) if ev[4] else "")
     else:
@@ -75,8 +84,27 @@ def _send(node, dst, text, lifespan):
     return False
 
 
+def load_key(path):
+    # -> the key bytes; AcommError naming the file and what is wrong with it
+    # (the key itself never appears in a message)
+    try:
+        with open(path) as f:
+            text = f.read().strip()
+    except OSError as e:
+        raise AcommError("key file %s: %s" % (path, e.strerror or e))
+    try:
+        key = bytes.fromhex(text)
+    except ValueError:
+        raise AcommError("key file %s: not hex digits" % path) from None
+    if not 16 <= len(key) <= 64:
+        raise AcommError("key file %s: %d bytes, the key must be 16 to 64" % (path, len(key)))
+    return key
+
+
 def build(args):
     node = Node(args.name, args.id, listener=_print_event)
+    if args.key_file is not None:
+        node.set_auth(Auth(load_key(args.key_file), args.tag_len, args.auth_counters))
     for kv in args.known:
         k, v = _keyval(kv)
         node.names.add(k, int(v))
@@ -118,7 +146,11 @@ def main(args):
     if args.udp is None and args.tcp_listen is None and args.tcp_connect is None:
         print("acomm node: give --udp, --tcp-listen and/or --tcp-connect", file=sys.stderr)
         return 2
-    node, ports = build(args)
+    try:
+        node, ports = build(args)
+    except AcommError as e:
+        print("acomm node: %s" % e, file=sys.stderr)
+        return 2
     # --send messages wait until their destination has been heard
     pending = [_keyval(m) for m in args.send]
     deadline = None if args.seconds is None else time.monotonic() + args.seconds

@@ -80,6 +80,14 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
     node = Node(cfg["name"], cfg["node_id"], clock, listener=listener)
     for name in cfg["peers"]:
         node.names.add(name, cfg["peers"][name])
+    a = cfg.get("auth")
+    if a is not None:
+        from acomm.auth import Auth
+
+        st = cfg["storage"]
+        # the counters beside the store, so they survive a restart with it
+        path = st["path"] + ".auth" if st is not None and open_store is not None else None
+        node.set_auth(Auth(a["key"], a["tag_len"], path, a["reserve"]))
     for i, lk in enumerate(cfg["links"]):
         try:
             drv = driver_class(lk["modem"])(lk["address"], **lk["options"])

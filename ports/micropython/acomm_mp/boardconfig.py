@@ -113,6 +113,29 @@ def _link(i, lk, node_id, names):
     return out
 
 
+def _auth(a):
+    # the network key (acomm.auth) as hex; a wrong one is named but never
+    # echoed, since error messages reach consoles and logs
+    if a is None:
+        return None
+    if not isinstance(a, dict):
+        _fail("auth", "a dict or None", a)
+    key = a.get("key")
+    try:
+        raw = bytes.fromhex(key) if isinstance(key, str) else None
+    except ValueError:
+        raw = None
+    if raw is None or not 16 <= len(raw) <= 64:
+        raise ConfigError("board config: auth.key: 16 to 64 bytes written as hex (32 to 128 digits); "
+                          "the value given is not (not shown)")
+    out = {"key": raw, "tag_len": _int(a, "tag_len", 4, 16, "auth.tag_len", 4),
+           "reserve": _int(a, "reserve", 1, 65536, "auth.reserve", 64)}
+    for k in a:
+        if k not in out:
+            _fail("auth", "known fields only", k)
+    return out
+
+
 def check(cfg):
     if not isinstance(cfg, dict):
         _fail("CONFIG", "a dict", cfg)
@@ -173,6 +196,7 @@ def check(cfg):
         s["report_period_s"] = _int(sta, "report_period_s", 0, 86400, "station.report_period_s", 0)
         sta = s
     out["station"] = sta
+    out["auth"] = _auth(cfg.get("auth"))
     for k in cfg:
         if k not in out:
             _fail("CONFIG", "known fields only", k)
