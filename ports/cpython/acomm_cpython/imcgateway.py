@@ -8,8 +8,10 @@
 #                                  UamRxFrame, UamRxRange
 #   announce_due(now), announce()  the Announce, every announce_ms
 #   take_output()                  [(endpoint, packet bytes)]
-# `now` is the node's clock (integer ms, ticks); wall() gives the epoch
-# seconds that IMC headers and deadlines use. The socket loop is
+# `now` is the IP side's clock (integer ms, ticks: ip_clock, the node's by
+# default): contacts and the announce period run on it, in real time even
+# when the node runs on simulated time; link requests take the node's own
+# clock. wall() gives the epoch seconds that IMC headers and deadlines use. The socket loop is
 # acomm_cpython.imcbridge.
 #
 # Every request accepted from IMC ends with exactly one final status. One
@@ -59,7 +61,7 @@ class _Req:
 class ImcGateway:
     def __init__(self, node, imc_id, sys_name=None, names=None, static=(), wall=None, lifespan_s=60,
                  max_requests=32, max_output=256, announce_ms=10000, sys_type=E.SYSTEM_CCU, services=(),
-                 uid=None):
+                 uid=None, ip_clock=None):
         # names: {IMC system name: acomm node name} beyond those that are the
         # same on both sides and those learned from announces.
         self.node = node
@@ -67,6 +69,7 @@ class ImcGateway:
         self.sys_name = sys_name or node.name
         self.names = dict(names or {})
         self.wall = wall or time.time
+        self.ip_clock = ip_clock or node.clock
         self.lifespan_s = lifespan_s
         self.max_requests = max_requests
         self.max_output = max_output
@@ -280,7 +283,7 @@ class ImcGateway:
         r.link = link
         self._reqs[rid] = r  # before the call: a refusal is reported from inside it
         self.stats["requests"] += 1
-        link.request(now, rid, dst, data, lifespan, 10, ack)
+        link.request(self.node.clock(), rid, dst, data, lifespan, 10, ack)
 
     def _uam_tx_frame(self, now, ep, pkt):
         m = pkt.msg
@@ -319,7 +322,7 @@ class ImcGateway:
         r.link = link
         self._reqs[rid] = r
         self.stats["requests"] += 1
-        link.range(now, rid, [dst], lifespan)
+        link.range(self.node.clock(), rid, [dst], lifespan)
 
     def _treq(self, now, ep, pkt):
         m = pkt.msg
@@ -413,4 +416,4 @@ class ImcGateway:
         flags = 0 if dst in (BROADCAST, self.node.name) else E.URF_PROMISCUOUS
         msg = {"abbrev": "UamRxFrame", "sys_src": self.imc_name(src), "sys_dst": self.imc_name(dst),
                "flags": flags, "data": bytes(data)}
-        self._publish(self.node.clock(), msg)
+        self._publish(self.ip_clock(), msg)
