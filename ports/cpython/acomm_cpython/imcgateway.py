@@ -66,8 +66,12 @@ class ImcGateway:
         # same on both sides and those learned from announces.
         self.node = node
         self.imc_id = imc_id
-        self.sys_name = sys_name or node.name
         self.names = dict(names or {})
+        if sys_name is None:
+            # a map entry for this node names it in IMC too
+            mine = [k for k in self.names if self.names[k] == node.name]
+            sys_name = mine[0] if mine else node.name
+        self.sys_name = sys_name
         self.wall = wall or time.time
         self.ip_clock = ip_clock or node.clock
         self.lifespan_s = lifespan_s
