@@ -36,6 +36,7 @@ def _bridge(*args):
 
 
 def _finish(p):
+    p.terminate()  # the bridge prints its counters and ends on SIGTERM
     out, err = p.communicate(timeout=20)
     assert p.returncode == 0, err
     return json.loads(out.strip().splitlines()[-1])
@@ -67,7 +68,7 @@ def _tx_frame(seq, dst, data, imc_dst):
 
 
 def test_uam_tx_frame_through_the_simulated_network_and_bad_input():
-    p, info = _bridge("--sim", "--speed", "20", "--seconds", "4")
+    p, info = _bridge("--sim", "--speed", "20", "--seconds", "20")
     s = _udp()
     try:
         top, auv = info["systems"]
@@ -132,7 +133,7 @@ def _listener(port, multicast):
 
 
 def test_announce_on_the_multicast_group_and_the_loopback():
-    p, info = _bridge("--sim", "--sim-node", "buoy=3", "--announce-period", "0.5", "--seconds", "2")
+    p, info = _bridge("--sim", "--sim-node", "buoy=3", "--announce-period", "0.5", "--seconds", "20")
     socks = []
     try:
         sysinfo = info["systems"][0]
@@ -162,3 +163,30 @@ def test_announce_on_the_multicast_group_and_the_loopback():
             s.close()
         report = _finish(p)
     assert report["bridge"]["announce_loopback"] >= 5
+
+
+def test_real_modem_path_against_an_emulated_seatrac_on_a_pty(tmp_path):
+    # the CPython port's serial stream and the real SeaTrac driver, with
+    # `acomm emulate` as the modem and a headless beacon 2 in its water
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([ROOT, os.path.join(ROOT, "ports", "cpython"), os.path.join(ROOT, "ports", "sim")])
+    link = str(tmp_path / "beacon1")
+    emu = subprocess.Popen([sys.executable, "-m", "acomm_cpython.cli", "emulate", "seatrac", "--link", link,
+                            "--address", "1", "--peer", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           env=env, text=True)
+    p = None
+    s = _udp()
+    try:
+        emu.stdout.readline()
+        p, info = _bridge("--name", "topside", "--id", "1", "--known", "auv=2", "--modem", "seatrac:" + link,
+                          "--no-multicast", "--broadcast", "none", "--seconds", "20")
+        top = info["systems"][0]
+        s.sendto(_tx_frame(4, "auv", b"ping", top["imc_id"]), ("127.0.0.1", top["port"]))
+        got = _collect(s, lambda g: g and g[-1][1].msg["value"] in (E.UTS_DELIVERED, E.UTS_FAILED), 6)
+        assert [m.msg["value"] for _, m in got] == [E.UTS_IP, E.UTS_SENT, E.UTS_DELIVERED], [m.msg for _, m in got]
+    finally:
+        s.close()
+        if p is not None:
+            _finish(p)
+        emu.terminate()
+        emu.communicate(timeout=10)

@@ -9,6 +9,7 @@
 # At the end (--seconds, or Ctrl-C) one JSON line of counters.
 
 import json
+import signal
 import sys
 import time
 
@@ -134,6 +135,10 @@ def build_real(args):
     return [node], node.step, None
 
 
+def _stop(signum, frame):
+    raise KeyboardInterrupt
+
+
 def main(args):
     try:
         nodes, advance, world = build_sim(args) if args.sim else build_real(args)
@@ -153,6 +158,7 @@ def main(args):
                for gw, p in zip(gws, bridge.ports)]
     print(json.dumps({"systems": systems, "discovery_port": bridge.discovery_port, "multicast": bridge.multicast}),
           flush=True)
+    signal.signal(signal.SIGTERM, _stop)  # a supervisor's stop still prints the counters
     try:
         bridge.run(args.seconds)
     except KeyboardInterrupt:
