@@ -95,7 +95,13 @@ class ImcBridge:
                 if broadcast is not None:
                     s.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
             if discovery:
-                self.disc = _bind_first("", self.announce_ports)
+                try:
+                    self.disc = _bind_first("", self.announce_ports)
+                except OSError as e:
+                    # five DUNEs or gateways on this host already: we still
+                    # announce and serve, we only learn no one's announces
+                    self._say("no discovery port: %s" % e)
+            if self.disc is not None:
                 if group is not None:
                     try:
                         mreq = socket.inet_aton(group) + socket.inet_aton(iface)
