@@ -11,6 +11,11 @@ def main(argv=None):
     b.add_argument("name", help="core, queue, discovery, or all")
     b.add_argument("--json", action="store_true", help="one JSON object per line")
 
+    br = sub.add_parser("bridge", help="a gateway to another protocol: 'bridge imc' speaks IMC over UDP (DUNE, Neptus)")
+    from . import bridgecmd
+
+    bridgecmd.add_arguments(br)
+
     d = sub.add_parser("demo", help="run the demonstration mission on the simulated ocean")
     from . import demo
 
@@ -36,6 +41,8 @@ def main(argv=None):
         from . import bench
 
         return bench.main(args)
+    if args.cmd == "bridge":
+        return bridgecmd.main(args)
     if args.cmd == "demo":
         return demo.main(args)
     if args.cmd == "emulate":

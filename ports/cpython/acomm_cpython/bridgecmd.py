@@ -1,0 +1,172 @@
+# `acomm bridge imc`: the IMC gateway on the command line (docs/imc.md,
+# "Gateway"). Either a simulated network (--sim: every simulated node is an
+# IMC system with its own UDP port, run in real time or --speed times
+# faster), or one node on real modems (--modem KIND:DEVICE[:BAUD] or
+# KIND:tcp:HOST:PORT, repeated for more links).
+#
+# The first line printed is JSON: each system's name, IMC id and UDP port,
+# and the discovery port, so a script can find a gateway bound to port 0.
+# At the end (--seconds, or Ctrl-C) one JSON line of counters.
+
+import json
+import signal
+import sys
+import time
+
+from acomm.compat import ticks_diff, ticks_ms
+from acomm.node import Node
+
+from .imcbridge import ANNOUNCE_GROUP, DATA_PORT, ImcBridge
+from .imcgateway import ImcGateway
+
+# the link's medium per modem kind: TransmissionRequest.comm_mean picks by it
+MEDIA = {"iridium": "satellite", "gsm": "gsm"}
+_SIM_STEP_MAX_MS = 1000  # simulated ms per loop round at most, so the sockets are read meanwhile
+
+
+def _keyval(text):
+    k, sep, v = text.partition("=")
+    if not sep:
+        raise ValueError("expected KEY=VALUE, got %r" % text)
+    return k, v
+
+
+def _hostport(text):
+    host, _, port = text.rpartition(":")
+    return (host or "127.0.0.1", int(port))
+
+
+def add_arguments(p):
+    p.add_argument("protocol", choices=["imc"], help="the protocol to bridge to (IMC: LSTS DUNE/Neptus)")
+    p.add_argument("--port", type=int, default=DATA_PORT,
+                   help="UDP port of the (first) system, trying 5 from there as DUNE does; 0: any (default %(default)s)")
+    p.add_argument("--host", default="0.0.0.0", help="address the UDP sockets bind to")
+    p.add_argument("--imc-id", type=lambda s: int(s, 0), default=0x4000,
+                   help="IMC id base: a system's id is this plus its acomm node id (default 0x4000)")
+    p.add_argument("--map", action="append", default=[], metavar="IMCNAME=ACOMMNAME",
+                   help="an IMC system name for an acomm node of another name")
+    p.add_argument("--peer", action="append", default=[], metavar="HOST:PORT",
+                   help="a static destination of everything published (UamRxFrame, UamRxRange)")
+    p.add_argument("--lifespan", type=float, default=60.0, metavar="S", help="lifespan of a UamTxFrame (s)")
+    p.add_argument("--announce-period", type=float, default=10.0, metavar="S", help="seconds between Announces")
+    p.add_argument("--iface", default="0.0.0.0", metavar="ADDR", help="interface address for multicast")
+    p.add_argument("--no-multicast", action="store_true", help="do not announce to, or listen on, 224.0.75.69")
+    p.add_argument("--broadcast", default="255.255.255.255", metavar="ADDR",
+                   help="broadcast address of the Announces ('none': no broadcast)")
+    p.add_argument("--seconds", type=float, help="stop after this long")
+    g = p.add_argument_group("simulated network")
+    g.add_argument("--sim", action="store_true", help="bridge a simulated network instead of real modems")
+    g.add_argument("--sim-node", action="append", default=[], metavar="NAME=ID",
+                   help="a simulated node (default: topside=1 auv=2); each is an IMC system on the next port")
+    g.add_argument("--sim-modem", default="seatrac", help="the simulated modems (default %(default)s)")
+    g.add_argument("--distance", type=float, default=120.0, metavar="M", help="metres between simulated nodes")
+    g.add_argument("--speed", type=float, default=1.0, help="simulated seconds per real second")
+    g.add_argument("--seed", type=int, default=1, help="the simulation's seed")
+    r = p.add_argument_group("real modems")
+    r.add_argument("--name", help="this node's acomm name (and IMC system name)")
+    r.add_argument("--id", type=int, help="this node's acomm id, 0..254")
+    r.add_argument("--known", action="append", default=[], metavar="NAME=ID", help="another acomm node")
+    r.add_argument("--modem", action="append", default=[], metavar="KIND:DEVICE[:BAUD]|KIND:tcp:HOST:PORT",
+                   help="a modem link (seatrac, evologics, micromodem, benthos, iridium, gsm)")
+
+
+def _gateways(args, nodes):
+    names = dict(_keyval(kv) for kv in args.map)
+    static = [_hostport(x) for x in args.peer]
+    out = []
+    for node in nodes:
+        gw = ImcGateway(node, args.imc_id + node.node_id, names=names, static=static, lifespan_s=args.lifespan,
+                        announce_ms=int(args.announce_period * 1000), ip_clock=ticks_ms)
+        node.listener = gw.on_event
+        out.append(gw)
+    return out
+
+
+def build_sim(args):
+    from acomm_sim.world import World
+
+    specs = [_keyval(x) for x in args.sim_node] or [("topside", "1"), ("auv", "2")]
+    world = World(seed=args.seed)
+    nodes = []
+    for i, (name, nid) in enumerate(specs):
+        sn = world.add(name, int(nid), args.sim_modem, position=(i * args.distance, 0, 5 if i else 0))
+        nodes.append(sn.node)
+    t0 = time.monotonic()
+    sim0 = world.now()
+
+    def advance():
+        # the simulated ocean keeps up with the wall clock times --speed
+        due = int((time.monotonic() - t0) * args.speed * 1000) - ticks_diff(world.now(), sim0)
+        if due >= world.step_ms:
+            world.run(min(due, _SIM_STEP_MAX_MS))
+
+    return nodes, advance, world
+
+
+def _modem_link(node, spec):
+    from acomm_sim.world import MODEMS
+
+    from .streams import TcpStream, open_serial
+
+    kind, _, where = spec.partition(":")
+    if kind not in MODEMS or not where:
+        raise ValueError("--modem %r: KIND:DEVICE[:BAUD] with KIND one of %s" % (spec, ", ".join(sorted(MODEMS))))
+    if where.startswith("tcp:"):
+        host, port = _hostport(where[4:])
+        stream = TcpStream(host, port)
+    else:
+        dev, _, baud = where.partition(":")
+        stream = open_serial(dev, int(baud) if baud else (115200 if kind == "seatrac" else 19200))
+    driver = MODEMS[kind][0](node.node_id, {})
+    medium = MEDIA.get(kind, "acoustic")
+    name = medium if medium not in node.links else "%s-%d" % (medium, len(node.links))
+    node.add_link(name, driver, stream, medium=medium)
+
+
+def build_real(args):
+    if args.name is None or args.id is None or not args.modem:
+        raise ValueError("without --sim, give --name, --id and at least one --modem")
+    node = Node(args.name, args.id)
+    for kv in args.known:
+        k, v = _keyval(kv)
+        node.names.add(k, int(v))
+    for spec in args.modem:
+        _modem_link(node, spec)
+    return [node], node.step, None
+
+
+def _stop(signum, frame):
+    raise KeyboardInterrupt
+
+
+def main(args):
+    try:
+        nodes, advance, world = build_sim(args) if args.sim else build_real(args)
+    except (ValueError, OSError) as e:
+        print("acomm bridge imc: %s" % e, file=sys.stderr)
+        return 2
+    gws = _gateways(args, nodes)
+    try:
+        bridge = ImcBridge(gws, ticks_ms, advance, host=args.host, port=args.port, iface=args.iface,
+                           group=None if args.no_multicast else ANNOUNCE_GROUP,
+                           broadcast=None if args.broadcast == "none" else args.broadcast,
+                           log=lambda t: print(t, file=sys.stderr, flush=True))
+    except OSError as e:
+        print("acomm bridge imc: %s" % e, file=sys.stderr)
+        return 1
+    systems = [{"name": gw.sys_name, "imc_id": gw.imc_id, "node_id": gw.node.node_id, "port": p}
+               for gw, p in zip(gws, bridge.ports)]
+    print(json.dumps({"systems": systems, "discovery_port": bridge.discovery_port, "multicast": bridge.multicast}),
+          flush=True)
+    signal.signal(signal.SIGTERM, _stop)  # a supervisor's stop still prints the counters
+    try:
+        bridge.run(args.seconds)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        bridge.close()
+        report = {"bridge": bridge.stats, "systems": {gw.sys_name: dict(gw.stats, **gw.peers.stats) for gw in gws}}
+        if world is not None:
+            report["sim_ms"] = world.now()
+        print(json.dumps(report), flush=True)
+    return 0
