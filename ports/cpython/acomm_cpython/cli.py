@@ -8,7 +8,7 @@ def main(argv=None):
     sub = p.add_subparsers(dest="cmd")
 
     b = sub.add_parser("bench", help="run a benchmark; prints JSON lines with --json")
-    b.add_argument("name", help="core, queue, discovery, or all")
+    b.add_argument("name", help="core, queue, discovery, ..., compare, or all (all but compare)")
     b.add_argument("--json", action="store_true", help="one JSON object per line")
 
     br = sub.add_parser("bridge", help="a gateway to another protocol: 'bridge imc' speaks IMC over UDP (DUNE, Neptus)")
