@@ -249,13 +249,13 @@ class MicroModemDriver(SlotDriver):
             self.stats["reboots"] += 1
             self.lost(now, "modem rebooted", self.reboot_wait_ms)
         elif len(f) >= 4:
-            self.info[f[2].decode()] = f[3].decode()
+            self.info[nm.text(f[2])] = nm.text(f[3])
 
     def _err(self, now, f):
         # $CAERR,HHMMSS,MODULE,NUM,MESSAGE
         self.stats["errors"] += 1
-        module = f[2].decode() if len(f) > 2 else "?"
-        msg = f[4].decode() if len(f) > 4 else ""
+        module = nm.text(f[2]) if len(f) > 2 else "?"
+        msg = nm.text(f[4]) if len(f) > 4 else ""
         reason = "modem error %s: %s" % (module, msg) if msg else "modem error %s" % module
         if self._state == S_CONFIG and self._cmd is not None:
             self._cmd = None

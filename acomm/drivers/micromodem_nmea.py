@@ -194,6 +194,16 @@ def real(f):
         return None
 
 
+def text(f):
+    # A text field as str. A sentence whose checksum matches may still hold
+    # bytes that are not UTF-8 (line noise with a lucky XOR): those become
+    # "?" instead of a UnicodeError out of the driver.
+    try:
+        return bytes(f).decode()
+    except ValueError:  # UnicodeError (UnicodeDecodeError on CPython)
+        return "".join(chr(b) if b < 0x80 else "?" for b in f)
+
+
 def unhex(f):
     # The bytes of a hex data field, or None when it is not even-length hex.
     n = len(f)

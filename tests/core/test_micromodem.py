@@ -556,3 +556,22 @@ def test_driver_never_raises_on_random_input():
                 seen[ev[0]] = seen.get(ev[0], 0) + 1
     for code in (EV_RX, EV_TX_DONE, EV_DELIVERED, EV_TX_FAILED, EV_RANGE, EV_DRIVER_UP, EV_DRIVER_DOWN):
         assert seen.get(code), (code, seen)
+
+
+def test_sentences_with_bytes_that_are_not_utf8():
+    # found by `acomm fuzz` (drv.micromodem, seed 1, case 1149): a sentence
+    # whose checksum matches may still carry non-UTF-8 bytes; $CAREV and
+    # $CAERR decoded their text fields and let a UnicodeError out
+    d = up_driver()
+    d.feed(10, b"$CAREV,120000,AUV,\xb4.9*%02X\r\n" % _xor(b"CAREV,120000,AUV,\xb4.9"))
+    d.feed(11, b"$CAERR,120000,\xff\xfe,1,\xb4*%02X\r\n" % _xor(b"CAERR,120000,\xff\xfe,1,\xb4"))
+    assert d.info["AUV"] == "?.9" and d.stats["errors"] == 1
+    d.feed(12, RXD)
+    assert d.take_events()[-1] == (EV_RX, 1, 2, b"Hello")  # still takes valid input
+
+
+def _xor(body):
+    x = 0
+    for b in body:
+        x ^= b
+    return x

@@ -31,6 +31,11 @@ def main(argv=None):
 
     flash.add_arguments(f)
 
+    z = sub.add_parser("fuzz", help="random and mutated inputs against every decoder, driver and the store")
+    from . import fuzz
+
+    fuzz.add_arguments(z)
+
     n = sub.add_parser("node", help="a node on UDP and/or TCP links; prints events, sends stdin lines 'DST TEXT'")
     from . import ipnode
 
@@ -49,6 +54,8 @@ def main(argv=None):
         return emulate.main(args)
     if args.cmd == "flash":
         return flash.main(args)
+    if args.cmd == "fuzz":
+        return fuzz.main(args)
     if args.cmd == "node":
         return ipnode.main(args)
     p.print_help()

@@ -1,0 +1,50 @@
+# `acomm fuzz`: runs acomm_sim.fuzz (the portable engine and its targets)
+# for a time or a number of cases, and prints one JSON line per target:
+# inputs tried, failures, and for each of the first failures the case
+# number and input to reproduce it:
+#   acomm fuzz --seconds 60 [--seed S] [--target NAME ...]
+#   acomm fuzz --seed S --target T --case N     (one case again)
+# Exit status 1 when anything failed.
+import json
+import tempfile
+
+
+def add_arguments(p):
+    p.add_argument("--seconds", type=float, default=10.0, help="real time to run, shared by the targets")
+    p.add_argument("--cases", type=int, default=None, help="run this many cases per target instead of a time")
+    p.add_argument("--seed", type=int, default=1, help="the inputs are a function of seed, target and case")
+    p.add_argument("--target", action="append", help="only this target (repeatable); --list names them")
+    p.add_argument("--case", type=int, default=None, help="run one case (needs --target)")
+    p.add_argument("--list", action="store_true", help="list the targets and exit")
+
+
+def main(args):
+    from acomm_sim import fuzz
+
+    with tempfile.TemporaryDirectory(prefix="acomm-fuzz-") as tmp:
+        targets = fuzz.all_targets(args.target, tmp)
+        if args.list:
+            for t in targets:
+                print(t.name)
+            return 0
+        if not targets:
+            print("no such target: %s" % ", ".join(args.target))
+            return 2
+        if args.case is not None:
+            bad = 0
+            for t in targets:
+                r = fuzz.run_case(t, args.seed, args.case)
+                print(json.dumps({"target": t.name, "case": args.case, "failed": r is not None,
+                                  "error": r[1] if r else None, "input": r[0].hex() if r else None}))
+                bad += r is not None
+            return 1 if bad else 0
+        ms = None if args.cases is not None else int(args.seconds * 1000)
+        results = fuzz.run(targets, seed=args.seed, ms=ms, cases=args.cases)
+    total = fails = 0
+    for r in results:
+        total += r.inputs
+        fails += r.failures
+        print(json.dumps({"target": r.name, "inputs": r.inputs, "failures": r.failures, "seconds": round(r.ms / 1000, 1),
+                          "first": [{"case": c, "error": e, "input": d.hex()} for c, d, e in r.first]}))
+    print(json.dumps({"target": "total", "seed": args.seed, "inputs": total, "failures": fails}))
+    return 1 if fails else 0

@@ -1,0 +1,217 @@
+# The fuzz engine of `acomm fuzz` (issue 10): random and mutated inputs
+# against acomm's decoders, drivers and store, on both runtimes.
+#
+# It lives in the simulator package, not in acomm/: it is test tooling that
+# no board carries, and ports/sim is on the path of both the CPython tests
+# and tools/mp_runtests.py, so the short fuzz of tests/core runs the same
+# code under MicroPython. Portable Python, stdlib only; randomness from
+# acomm.prng so that a seed gives the same inputs on both runtimes.
+#
+# A target is an object with
+#   name          short name (the CLI's --target)
+#   corpus        list of valid inputs (bytes), built with acomm's encoders
+#   run(data, rng) feeds one input to the decoder and checks its oracle;
+#                 raises Failure when the oracle is broken. Any exception
+#                 that is not an acomm.errors.AcommError is a failure too.
+#   optional make(rng) -> bytes: an input of its own (else mutate()).
+#
+# Every case is a function of (seed, target name, case number) alone: a
+# failure is reproduced with `acomm fuzz --seed S --target T --case N`
+# whatever ran before it. Targets keep no state between cases except what
+# they check on purpose (the driver targets' long-lived drivers, which are
+# reset by their own case numbers; see fuzz_drivers).
+
+from acomm.errors import AcommError
+from acomm.prng import Prng
+
+try:
+    import time
+
+    _ms = time.ticks_ms
+    _diff = time.ticks_diff
+except AttributeError:
+    _ms = lambda: int(time.monotonic() * 1000)  # noqa: E731
+    _diff = lambda a, b: a - b  # noqa: E731
+
+
+class Failure(Exception):
+    # An oracle broken by an input (not an acomm error: it must escape).
+    pass
+
+
+def name_hash(s):
+    # FNV-1a of the name: the same on both runtimes (hash() is not)
+    h = 0x811C9DC5
+    for c in s.encode():
+        h = ((h ^ c) * 0x01000193) & 0xFFFFFFFF
+    return h
+
+
+def case_rng(seed, name, case):
+    return Prng((seed * 0x9E3779B1 + name_hash(name) + case * 0x85EBCA6B) & 0xFFFFFFFF)
+
+
+# -- mutators ---------------------------------------------------------------
+# Each takes (rng, data, corpus) and returns new bytes. Sizes stay bounded
+# (at most the input plus 64 bytes per step, a few steps per case) so a
+# decoder's time per case stays small.
+
+def _flip(rng, d, corpus):
+    if not d:
+        return d
+    b = bytearray(d)
+    for _ in range(1 + rng.below(4)):
+        p = rng.below(len(b) * 8)
+        b[p >> 3] ^= 0x80 >> (p & 7)
+    return bytes(b)
+
+
+_SPECIAL = (0, 1, 0x7F, 0x80, 0xFF, 0x0A, 0x0D, 0x24, 0x2C, 0x2A, 0xC0, 0xDB, 0xFE)
+
+
+def _set(rng, d, corpus):
+    if not d:
+        return d
+    b = bytearray(d)
+    for _ in range(1 + rng.below(3)):
+        b[rng.below(len(b))] = _SPECIAL[rng.below(len(_SPECIAL))] if rng.chance(0.5) else rng.below(256)
+    return bytes(b)
+
+
+def _truncate(rng, d, corpus):
+    if not d:
+        return d
+    if rng.chance(0.5):
+        return d[: rng.below(len(d))]
+    return d[rng.below(len(d)) :]
+
+
+def _extend(rng, d, corpus):
+    tail = rng.bytes(1 + rng.below(32))
+    return d + tail if rng.chance(0.7) else tail + d
+
+
+def _insert(rng, d, corpus):
+    p = rng.below(len(d) + 1)
+    return d[:p] + rng.bytes(1 + rng.below(16)) + d[p:]
+
+
+def _delete(rng, d, corpus):
+    if len(d) < 2:
+        return d
+    p = rng.below(len(d))
+    return d[:p] + d[p + 1 + rng.below(min(8, len(d) - p)) :]
+
+
+def _splice(rng, d, corpus):
+    # the head of one valid input and the tail of another
+    o = corpus[rng.below(len(corpus))]
+    return d[: rng.below(len(d) + 1)] + o[rng.below(len(o) + 1) :]
+
+
+def _concat(rng, d, corpus):
+    # two valid inputs back to back, maybe garbage in between
+    o = corpus[rng.below(len(corpus))]
+    mid = rng.bytes(rng.below(8)) if rng.chance(0.5) else b""
+    return d + mid + o
+
+
+def _repeat(rng, d, corpus):
+    if not d:
+        return d
+    a = rng.below(len(d))
+    n = 1 + rng.below(min(16, len(d) - a))
+    return d[: a + n] + d[a : a + n] * (1 + rng.below(3)) + d[a + n :]
+
+
+MUTATORS = (_flip, _set, _truncate, _extend, _insert, _delete, _splice, _concat, _repeat)
+
+
+def mutate(rng, corpus, limit=4096):
+    # A valid input changed by 1..3 mutators, or (1 in 16) plain noise.
+    if not corpus or rng.below(16) == 0:
+        return rng.bytes(rng.below(64))
+    d = corpus[rng.below(len(corpus))]
+    for _ in range(1 + rng.below(3)):
+        d = MUTATORS[rng.below(len(MUTATORS))](rng, d, corpus)
+    return d[:limit]
+
+
+# -- running ------------------------------------------------------------------
+
+def input_of(target, rng):
+    make = getattr(target, "make", None)
+    if make is not None and rng.chance(0.5):
+        return make(rng)
+    return mutate(rng, target.corpus)
+
+
+def run_case(target, seed, case):
+    # -> None, or (input bytes, description) when the case failed
+    rng = case_rng(seed, target.name, case)
+    data = b""
+    try:
+        data = input_of(target, rng)
+        target.run(data, rng)
+    except AcommError:
+        pass  # bad input, refused the expected way
+    except Failure as e:
+        return data, "oracle: %s" % (e,)
+    except Exception as e:  # anything else is a decoder bug
+        return data, "%s: %s" % (type(e).__name__, e)
+    return None
+
+
+class Result:
+    def __init__(self, name):
+        self.name = name
+        self.inputs = 0
+        self.failures = 0
+        self.first = []  # up to 3 of (case, input, description)
+        self.ms = 0
+
+
+def run(targets, seed=1, ms=None, cases=None, on_failure=None, start=0):
+    # Runs the targets round robin, a batch of cases each turn, until `ms`
+    # (real milliseconds) have passed or each has run `cases` cases.
+    # -> [Result] in target order.
+    results = [Result(t.name) for t in targets]
+    t0 = _ms()
+    nxt = [start] * len(targets)
+    batch = 50
+    while True:
+        busy = False
+        for i, t in enumerate(targets):
+            r = results[i]
+            n = batch if cases is None else min(batch, cases - r.inputs)
+            if n <= 0:
+                continue
+            busy = True
+            a = _ms()
+            for _ in range(n):
+                case = nxt[i]
+                nxt[i] += 1
+                bad = run_case(t, seed, case)
+                r.inputs += 1
+                if bad is not None:
+                    r.failures += 1
+                    if len(r.first) < 3:
+                        r.first.append((case, bad[0], bad[1]))
+                    if on_failure is not None:
+                        on_failure(t.name, case, bad[0], bad[1])
+            r.ms += _diff(_ms(), a)
+            if ms is not None and _diff(_ms(), t0) >= ms:
+                return results
+        if not busy:
+            return results
+
+
+def all_targets(names=None, tmpdir=None):
+    # Every target, or those named. Imported here so a caller that fuzzes
+    # one family does not build the others' corpora.
+    from . import fuzz_decoders, fuzz_drivers, fuzz_store
+
+    ts = fuzz_decoders.targets() + fuzz_drivers.targets() + fuzz_store.targets(tmpdir)
+    if names:
+        ts = [t for t in ts if t.name in names]
+    return ts
