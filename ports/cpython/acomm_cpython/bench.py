@@ -25,6 +25,7 @@ BENCHES = {
     "transfer": "transfer_workload",
     "store": "store_workload",
     "footprint": "footprint_workload",
+    "soak": "soak_workload",
 }
 
 
