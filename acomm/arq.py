@@ -105,7 +105,18 @@ class Outgoing:
         while self.base < self.count and self.acked[self.base]:
             self.base += 1
         if self.base == self.count:
-            self.complete = True  # the completion itself was lost, but nothing is missing
+            if base == self.count:
+                self.complete = True  # the completion itself was lost, but nothing is missing
+            else:
+                # Acks of earlier SACKs say all is there and this one says
+                # the receiver lacks fragments from its base on: it lost
+                # them (its reassembly timed out, or it restarted). Those
+                # it does not list go again; trusting the old acks let a
+                # transfer "complete" that the receiver never had.
+                for i in range(base, self.count):
+                    k = i - base - 1
+                    self.acked[i] = 1 if k >= 0 and (k >> 3) < len(bm) and bm[k >> 3] & (1 << (k & 7)) else 0
+                self.base = base
         return True
 
 

@@ -40,6 +40,9 @@ class Node:
         # them; bounded: the oldest are dropped (and counted) beyond the cap.
         self.backlog = []
         self.backlog_dropped = 0
+        # reads and writes that raised OSError (an unplugged USB adapter, a
+        # UART error): the link goes on without those bytes
+        self.stream_errors = 0
         # the transport (acomm.transport.Transport) sets itself here: it gets
         # the links' SEGMENT frames and the statuses of its own requests
         self.transport = None
@@ -128,17 +131,27 @@ class Node:
                 # (a babbling device, a fault) must not hold the loop here;
                 # what is left is read at the next step
                 reads = _READS_PER_STEP
-                data = stream.read(_READ_CHUNK)
+                data = self._read(stream)
                 while data:
                     link.feed(now, data)
                     reads -= 1
                     if not reads:
                         break
-                    data = stream.read(_READ_CHUNK)
+                    data = self._read(stream)
             link.poll(now)
             if stream is not None:
                 self._write(name, link, stream)
         return now
+
+    def _read(self, stream):
+        # A stream whose device went away (pyserial's SerialException is an
+        # OSError) must not stop the node: its other links, its transport
+        # and its timers go on, and the driver recovers when bytes come back.
+        try:
+            return stream.read(_READ_CHUNK)
+        except OSError:
+            self.stream_errors += 1
+            return None
 
     def _write(self, name, link, stream):
         # machine.UART.write may take only part of the bytes (or return None
@@ -149,7 +162,15 @@ class Node:
             out = link.take_output()
             if not out:
                 return
-        n = stream.write(out)
+        try:
+            n = stream.write(out)
+        except OSError:
+            # the bytes are lost as on a cut line (the driver's timeouts
+            # see to its commands); not kept, or stale commands would reach
+            # the modem when the line comes back
+            self.stream_errors += 1
+            self._unsent[name] = b""
+            return
         if n is None:
             n = 0
         self._unsent[name] = out[n:] if n < len(out) else b""

@@ -19,6 +19,11 @@
 # reuses an id a receiver may still remember (duplicate suppression keys on
 # origin and id), without a write per packet.
 #
+# Another, key 0xFFFFFE, holds the receiver's last DONE_MEMORY delivered
+# (origin, pid) pairs, 3 bytes each, rewritten at every delivery: a
+# receiver that lost power between delivering a packet and its sender
+# hearing the SACK would otherwise deliver the resent packet a second time.
+#
 # Overflow rule: a store with a capacity keeps its last quarter for urgent
 # packets (priority <= urgent). A packet that does not fit is refused when
 # it is offered (send() reports `failed`; a relay answers "receiver full"
@@ -31,6 +36,8 @@ from .errors import StoreFull
 
 _HDR = const(11)
 _META = const(0xFFFFFF)
+_DONE = const(0xFFFFFE)
+DONE_MEMORY = const(32)
 _PID_BLOCK = const(32)
 _REC_OVERHEAD = const(12)  # acomm.store's record header and CRC
 _F_COMPRESSED = const(1)
@@ -38,7 +45,9 @@ _F_MEDIUM = const(2)
 # Room kept free for the id-limit record: a store rewrites it while the old
 # copy is still live, so two copies must fit. Without it a full store could
 # not move the limit and no new packet id could be handed out safely.
-_META_ROOM = const(2 * (_REC_OVERHEAD + 2))
+# The same for the delivered pairs (at their most), so that a full store
+# still remembers what it delivered.
+_META_ROOM = const(2 * (_REC_OVERHEAD + 2) + 2 * (_REC_OVERHEAD + 3 * DONE_MEMORY))
 
 
 class MemoryStore:
@@ -82,6 +91,7 @@ class PacketStore:
         self.chunk = min(getattr(store, "max_record", 65535), 65535)
         self.pid = 0
         self._limit = 0  # ids up to here are covered by the stored limit
+        self.done = []  # (origin, pid) delivered lately, as recover() found them
 
     def _sizes(self, p):
         n = _HDR + (1 + len(p.medium) if p.medium else 0) + len(p.body)
@@ -108,6 +118,17 @@ class PacketStore:
             self._limit = limit
         self.pid = pid
         return pid
+
+    def save_done(self, done):
+        # done: [(origin, pid)], at most DONE_MEMORY of them
+        b = bytearray(3 * len(done))
+        i = 0
+        for o, pid in done:
+            b[i] = o
+            b[i + 1] = pid >> 8
+            b[i + 2] = pid & 0xFF
+            i += 3
+        self.store.put(_DONE, bytes(b))  # the room for it is kept (_META_ROOM)
 
     def put(self, p):
         # raises StoreFull (nothing of the packet stays then)
@@ -153,10 +174,15 @@ class PacketStore:
                 m = st.get(k)
                 if m is not None and len(m) == 2:
                     self._limit = self.pid = (m[0] << 8) | m[1]
+            elif k == _DONE:
+                m = st.get(k) or b""
+                self.done = [(m[i], (m[i + 1] << 8) | m[i + 2]) for i in range(0, len(m) - 2, 3)]
             elif k >> 24 == 0:
                 heads[k] = True
         out = []
         for k in keys:
+            if k == _DONE:
+                continue
             if k == _META or k >> 24:
                 if k != _META and (k & 0xFFFFFF) not in heads:
                     st.delete(k)  # a chunk whose packet is gone or never finished

@@ -35,7 +35,7 @@ from .compat import const, ticks_add, ticks_diff
 from .errors import AcommError, StoreFull
 from .events import DELIVERED, EV_PACKET_STATUS, EXPIRED, FAILED, QUEUED, TRANSMITTED
 from .frame import SEGMENT
-from .packetstore import MemoryStore, PacketStore
+from .packetstore import DONE_MEMORY, MemoryStore, PacketStore
 from .route import MEDIUM_ALL, Router
 from .transport_rx import Receiving
 
@@ -170,6 +170,7 @@ class Transport(Receiving):
             p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, s.body, s.compressed, s.medium)
             p.chunks = s.chunks
             self._queue(p)
+        self._done = self.packets.done[-DONE_MEMORY:]
 
     # -- statuses --------------------------------------------------------------------
     def _emit(self, ev):

@@ -5,21 +5,22 @@
 # Bounds: at most _MAX_RX reassemblies at a time (a sender beyond that is
 # refused "receiver full" and tries again later), each of at most
 # max_packet bytes, dropped after _RX_TIMEOUT_MS without a fragment; the
-# last _DONE_MEMORY delivered (origin, packet id) pairs, so a packet sent
+# last DONE_MEMORY delivered (origin, packet id) pairs, so a packet sent
 # again (its SACK was lost, or the sender restarted before it came) is
-# acknowledged and not delivered twice.
+# acknowledged and not delivered twice. They are kept in the store too
+# (acomm.packetstore), so a receiver that restarts still knows them.
 
 from . import segment as sg
 from .arq import Reassembly
 from .compat import const, ticks_diff
-from .errors import DecodeError
+from .errors import DecodeError, StoreFull
 from .events import EV_PACKET, EV_REFUSED, FAILED, TRANSMITTED
 from .frame import SEGMENT
+from .packetstore import DONE_MEMORY
 
 _SACK_PRIORITY = const(2)
 _RX_TIMEOUT_MS = const(600000)
 _MAX_RX = const(8)
-_DONE_MEMORY = const(32)
 
 
 class _Room:
@@ -136,19 +137,24 @@ class Receiving:
                     data = decompress(body, self.max_packet)
                 except DecodeError:
                     return self._bad(r)
-            self._remember(origin, h.pid)
+            self._remember(origin, h.pid, False)
             names = self.node.names
             g = self.node.guard
             if g is not None and g.is_command(data):
                 if r.unauthed:
                     self.stats["refused_unauthed"] += 1
                     self._emit((EV_REFUSED, None, names.name_of(origin), "command without a valid authentication tag"))
+                    self._save_done()
                     r.done_pid = h.pid
                     r.frags = {}
                     return True
                 self.node.auth.commit()  # see Link: before it is carried out
             self.stats["received"] += 1
             self._emit((EV_PACKET, names.name_of(origin), names.name_of(final), data))
+            # saved after the application has it: a power cut in between
+            # gives at worst a second delivery, never a packet acknowledged
+            # that nobody saw
+            self._save_done()
         r.done_pid = h.pid
         r.frags = {}  # the memory goes; the lane remembers only the completion
         return True
@@ -161,10 +167,18 @@ class Receiving:
         r.header = None
         return True
 
-    def _remember(self, origin, pid):
+    def _remember(self, origin, pid, save=True):
         self._done.append((origin, pid))
-        if len(self._done) > _DONE_MEMORY:
+        if len(self._done) > DONE_MEMORY:
             self._done.pop(0)
+        if save:
+            self._save_done()
+
+    def _save_done(self):
+        try:
+            self.packets.save_done(self._done)
+        except StoreFull:  # its room is kept; a store that still says no costs only the memory
+            self.stats["store_full"] += 1
 
     def _sack(self, now, link, src, seg, tries=0):
         # seg: (head, bytes) from acomm.segment

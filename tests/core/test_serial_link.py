@@ -220,3 +220,40 @@ def test_a_link_without_a_stream_keeps_running():
         n.step()
         clk.advance(10)
     assert n.links["radio"].stats["tx_refused"] > 0
+
+
+class _Unplugged:
+    # a stream whose device went away for a while: read and write raise
+    def __init__(self, end):
+        self.end = end
+        self.out = False
+
+    def read(self, n=-1):
+        if self.out:
+            self.end.read()
+            raise OSError(5, "unplugged")
+        return self.end.read(n)
+
+    def write(self, data):
+        if self.out:
+            raise OSError(5, "unplugged")
+        return self.end.write(data)
+
+
+def test_a_stream_that_raises_does_not_stop_the_node():
+    # pyserial raises when a USB adapter is pulled: the node must keep
+    # stepping (its timers, its statuses) and use the line when it is back
+    clk = ManualClock()
+    a, b = uart_pair(clock=clk)
+    cable = _Unplugged(b)
+    buoy, diver = make_nodes((a, cable), clk)
+    cable.out = True
+    r1 = diver.send("radio", "buoy", b"while unplugged", 5, priority=2, ack=True)
+    run((buoy, diver), clk, 8000)  # raises out of step() without the fix
+    assert diver.stream_errors > 0
+    assert diver.listener.final(r1) is not None  # it still got its final status
+    cable.out = False
+    r2 = diver.send("radio", "buoy", b"plugged back", 30, priority=2, ack=True)
+    run((buoy, diver), clk, 5000)
+    assert diver.listener.final(r2) == DELIVERED
+    assert [bytes(e[4]) for e in buoy.listener.of(EV_RECEIVED)] == [b"plugged back"]

@@ -158,3 +158,22 @@ def test_reassembly_takes_fragments_in_any_order_and_twice():
         s = sg.decode(head, data)
         r.add(r.index_of(s.index), s.payload, 0)
     assert r.complete() and r.blob() == blob and r.count == len(frags)
+
+
+def test_a_receiver_that_lost_fragments_is_not_taken_for_complete():
+    # fragment 1 was acknowledged, then the receiver's reassembly timed
+    # out (or it restarted); fragment 0 arrives alone and its SACK says
+    # base 1 with nothing after it: fragment 1 must go again, not the
+    # packet be reported delivered
+    from acomm import segment as sg
+    from acomm.arq import Outgoing
+
+    o = Outgoing(bytes(50), 28, 0, 1, 7)
+    assert o.count == 2
+    o.new_round()
+    s = sg.decode(*sg.sack(0, 1, 0, b"\x01"))  # fragment 1 is there
+    o.on_sack(s)
+    assert not o.complete
+    o.on_sack(sg.decode(*sg.sack(0, 1, 1)))  # only fragment 0 is there now
+    assert not o.complete
+    assert o.new_round() == [1]

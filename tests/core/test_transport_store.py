@@ -163,3 +163,21 @@ def test_a_full_store_can_still_move_the_packet_id_limit():
         assert len(ps.recover()) == kept
         assert ps.next_pid() > 200  # above every id used before the restart
         st.close()
+
+
+def test_a_restarted_receiver_does_not_deliver_a_resent_packet_twice():
+    # the buoy delivered the packet, the diver never heard the SACK, then
+    # the buoy lost power: its memory of what it delivered must come back
+    # from its store, or the resent packet is delivered a second time
+    sd, sb = MemoryStore(), MemoryStore()
+    w, a, b, _, ta = net(stores={"diver": sd, "buoy": sb})
+    pid = ta.send(w.now(), "buoy", b"alarm: low air", 3600, 2)
+    before, live = dict(sd._d), sd.live_bytes
+    assert w.run(600000, until=lambda: DELIVERED in statuses(a, pid))
+    sd._d, sd.live_bytes = before, live  # the diver never saw the SACK
+    _restart(b, w, sb)  # the buoy restarts: a new transport on its store
+    t2 = _restart(a, w, sd)
+    assert t2.pending() == [pid]
+    assert w.run(600000, until=lambda: statuses(a, pid).count(DELIVERED) == 2)
+    assert len(packets(b)) == 1
+    assert b.node.transport.stats["rx_dup"] == 1

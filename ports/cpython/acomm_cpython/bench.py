@@ -28,8 +28,10 @@ BENCHES = {
     # acomm beside IMC, rmw_desert's CBOR and ltcodecs (BENCHMARKS.md); it
     # runs transfer and footprint again, so `all` leaves it out
     "compare": "compare_workload",
+    # 24 simulated hours with faults: minutes of wall time, so not in `all`
+    "soak": "soak_workload",
 }
-NOT_IN_ALL = ("compare",)
+NOT_IN_ALL = ("compare", "soak")
 
 
 def find_micropython():

@@ -1,0 +1,308 @@
+# `acomm bench soak`: the fault injection soak (issue 10). The demo
+# network (docs/demo.md: buoy, diver and AUV on SeaTrac beacons, their
+# places, the channel's loss curve) runs 24 simulated hours of transport
+# packets, each node with a Transport on a store file in a temporary
+# directory, while faults come at random (acomm_sim.soakfaults.FaultPlan):
+#
+#   modem_reboot   the beacon restarts and forgets what was in flight
+#   unplug         the serial cable is out for 10 s..5 min: reads raise
+#                  OSError or return nothing, what the modem sends is lost
+#   noise          a noise burst of 10 s..10 min, everywhere or at one node
+#   power_loss     the node loses power (its beacon too): its Node, links,
+#                  driver and Transport are dropped and rebuilt from its
+#                  store file, as a board's boot would
+#   store_fill     a burst of low-priority packets until the store refuses
+#                  one; the AUV's store is small (3 KiB) all the time
+#   clock_jump     the node's wall clock jumps -30..+30 min; ticks run on
+#
+# Then the traffic stops and the run goes on until every packet has a final
+# status (at most until the longest lifespan and clock jump have passed).
+# Figures (acomm_sim.ledger says how packets are counted):
+#   packets_accepted       send() took it (queued)
+#   packets_lost           accepted, not delivered, not reported expired or
+#                          failed (target 0)
+#   duplicates_delivered   deliveries to an application beyond the first (0)
+#   peak_memory_bytes      tracemalloc's peak over the whole run: the whole
+#                          process's Python allocations, the three nodes,
+#                          the emulators, the World and this harness
+#   task_deaths            exceptions that escaped a node's step (0)
+# and the faults that happened, per kind. The schedule in the demo's TDMA
+# cycle has longer slots for the AUV and the buoy (7 s): the demo's 3 s
+# AUV slot holds only one-way telemetry, not 30-byte fragments and SACKs.
+import os
+import shutil
+import tempfile
+import time
+import tracemalloc
+
+from acomm.errors import AcommError
+from acomm.events import EV_PACKET, EV_PACKET_STATUS
+from acomm.mac import MacDriver, Tdma
+from acomm.node import Node
+from acomm.prng import Prng
+from acomm.store import Store
+from acomm.transport import Transport
+from acomm_sim.channel import Channel
+from acomm_sim.ledger import Ledger
+from acomm_sim.soakfaults import Cable, FaultPlan, WallClock
+from acomm_sim.world import MODEMS, World
+
+from ..demo.mission import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
+
+PER_RUNTIME = ()
+NAMES = (BUOY, DIVER, AUV)
+GUARD_MS = 300
+SLOTS = ((BUOY, 7000, GUARD_MS), (DIVER, 10000, GUARD_MS), (AUV, 7000, GUARD_MS))
+TX_MS = 3000  # a full SeaTrac frame: 500 ms + 80 ms a byte for 30 bytes
+LINK_OPTS = {"advert_period_ms": 60000, "queue_capacity": 64, "max_retries": 100}
+STORE_BYTES = {BUOY: 32768, DIVER: 16384, AUV: 3072}
+SMALL_STORE = AUV
+LIFESPANS = (300, 900, 1800, 3600)
+# faults per simulated hour (the 24 h run); the test's short soak multiplies them
+RATES = {"modem_reboot": 2, "unplug": 2, "noise": 2, "power_loss": 1, "store_fill": 0.5, "clock_jump": 1}
+PACKETS_PER_HOUR = 12  # per node
+
+
+def _param(kind):
+    if kind == "unplug":
+        return lambda r: (r.range(10, 300) * 1000, r.chance(0.5))  # (ms, raises)
+    if kind == "noise":
+        return lambda r: (r.range(10, 600) * 1000, r.below(4))  # (ms, receiver index; 3: everywhere)
+    if kind == "clock_jump":
+        return lambda r: r.range(-1800, 1800)
+    return lambda r: 0
+
+
+def payload(seq, n):
+    # 4 bytes of seq, then bytes that seq and n fix (half of them text, so
+    # that some packets compress)
+    body = Prng(seq * 7919 + n).bytes(n - 4)
+    if seq % 2:
+        body = (b"depth 12.5 m, heading 270, air 150 bar; " * 8)[: n - 4]
+    return seq.to_bytes(4, "big") + body
+
+
+class Soak:
+    def __init__(self, seed=1, hours=24.0, rate_scale=1.0, traffic_scale=1.0, tmpdir=None):
+        self.seed = seed
+        self.duration_ms = int(hours * 3600000)
+        self.dir = tmpdir or tempfile.mkdtemp(prefix="acomm-soak-")
+        self._own_dir = tmpdir is None
+        self.channel = Channel(seed=seed, loss_curve=LOSS_CURVE)
+        # 20 ms steps (the World's default is 10): half the steps for 24 h;
+        # the SeaTrac lines and slots are hundreds of ms, so nothing is missed
+        self.w = w = World(seed=seed, channel=self.channel, step_ms=20, max_quiet_ms=200)
+        self.ledger = Ledger()
+        self.deaths = {}  # exception type -> count
+        self.walls = {}
+        self.cables = {}
+        self.ends = {}
+        self.sn = {}
+        self.rebuilt = 0
+        for name in NAMES:
+            ends = w.modem_ends("seatrac", ADDR[name], {"part": 843 if name == DIVER else 795,
+                                                      "seed": seed * 10 + ADDR[name]}, START[name])
+            self.ends[name] = ends
+            self.cables[name] = Cable(ends[1])
+            self.walls[name] = WallClock(w.clock)
+            node = self._build(name)
+            self.sn[name] = w.adopt(name, node, [ends], step=self._stepper(name))
+        rates = dict((k, (v * rate_scale, _param(k))) for k, v in RATES.items())
+        self.faults = FaultPlan(seed * 31 + 7, w.now(), self.duration_ms, rates, NAMES, self._fault)
+        self.rng = Prng(seed * 101 + 3)
+        self.traffic_period_ms = int(3600000 / (PACKETS_PER_HOUR * traffic_scale * len(NAMES)))
+        self._traffic_until = w.now() + self.duration_ms
+        self.stores_full = 0
+
+    # -- the nodes -----------------------------------------------------------
+    def _build(self, name):
+        # a node as its boot makes it: new objects, the store from its file
+        w = self.w
+        node = Node(name, ADDR[name], w.clock, listener=self._listener(name))
+        for other in NAMES:
+            node.names.add(other, ADDR[other])
+        driver = MODEMS["seatrac"][0](ADDR[name], {})
+        node.add_link("acoustic", MacDriver(driver, Tdma(SLOTS, name, 0, TX_MS)), self.cables[name], **LINK_OPTS)
+        # sync=False: flushed to the OS at every put, which is what survives
+        # here (the process lives on; a power cut of the host is the crash
+        # tests' business), and 24 h of fsyncs would cost minutes
+        store = Store(os.path.join(self.dir, name + ".store"), capacity_bytes=STORE_BYTES[name], max_record=256,
+                      sync=False)
+        Transport(node, store=store, wall=self.walls[name])
+        return node
+
+    def _stepper(self, name):
+        def step(now):
+            try:
+                self.sn[name].node.step(now)
+            except Exception as e:  # a task died: count it, the soak goes on
+                k = type(e).__name__
+                self.deaths[k] = self.deaths.get(k, 0) + 1
+        return step
+
+    def _listener(self, name):
+        me = ADDR[name]
+        led = self.ledger
+
+        def on_event(ev):
+            code = ev[0]
+            if code == EV_PACKET_STATUS:
+                led.status(me, ev[1], ev[2])
+            elif code == EV_PACKET:
+                data = ev[3]
+                if ev[2] != name or len(data) < 4:
+                    led.delivered(-1, False)
+                    return
+                seq = int.from_bytes(data[:4], "big")
+                led.delivered(seq, data == payload(seq, len(data)))
+        return on_event
+
+    def _power_loss(self, name, now):
+        sn = self.sn[name]
+        old = sn.node.transport
+        old.store.close()  # what was flushed stays in the file; the rest is gone
+        sn.host_end.read()  # and so is what waited in the UART
+        self.ends[name][0].reboot(now)  # the beacon is on the same supply
+        node = self._build(name)
+        sn.node = node
+        sn.driver = node.links["acoustic"].driver
+        sn.wake = None
+        self.rebuilt += 1
+
+    # -- faults --------------------------------------------------------------
+    def _fault(self, now, kind, name, param):
+        if kind == "modem_reboot":
+            self.ends[name][0].reboot(now)
+        elif kind == "unplug":
+            ms, raises = param
+            self.cables[name].unplug(raises)
+            self.faults.later(now + ms, "plug", name, None)
+        elif kind == "plug":
+            self.cables[name].plug()
+        elif kind == "noise":
+            ms, who = param
+            self.channel.noise_burst(now, ms, receiver=None if who >= len(NAMES) else ADDR[NAMES[who]])
+        elif kind == "power_loss":
+            self._power_loss(name, now)
+        elif kind == "clock_jump":
+            self.walls[name].jump(param)
+        elif kind == "store_fill":
+            self._fill(name, now)
+
+    def _fill(self, name, now):
+        # low-priority 200-byte packets until the store refuses one; always
+        # on the node with the small store: filling a 32 KiB store takes
+        # hours of SeaTrac airtime to drain, and this is about what a full
+        # store does, not about a backlog
+        name = SMALL_STORE
+        for _ in range(200):
+            if self._send(name, self._other(name), 200, 3600, 14, now) is None:
+                self.stores_full += 1
+                return
+
+    # -- traffic -------------------------------------------------------------
+    def _other(self, name):
+        others = [n for n in NAMES if n != name]
+        return others[self.rng.below(len(others))]
+
+    def _send(self, src, dst, size, life, prio, now):
+        # -> pid, or None when the store refused the packet
+        led = self.ledger
+        seq = led.begin(ADDR[src])
+        t = self.sn[src].node.transport
+        try:
+            pid = t.send(now, dst, payload(seq, size), life, prio)
+        except AcommError:
+            led.not_sent(seq)
+            raise
+        led.sent(seq, ADDR[src], pid)
+        return None if led.final[seq] else pid
+
+    def poll(self, now):
+        # the traffic task: one packet now, the next after an exponential gap
+        if now >= self._traffic_until:
+            return now + 3600000
+        r = self.rng
+        src = NAMES[r.below(len(NAMES))]
+        big = r.chance(0.3)
+        size = r.range(40, 240) if big else r.range(6, 26)
+        self._send(src, self._other(src), size, LIFESPANS[r.below(len(LIFESPANS))], r.range(1, 14), now)
+        from acomm_sim.soakfaults import _exp
+
+        return now + 1000 + int(_exp(r) * self.traffic_period_ms)
+
+    # -- running -------------------------------------------------------------
+    def run(self, drain_ms=3 * 3600000, chunk_ms=600000):
+        w = self.w
+        w.add_task(self)
+        w.add_task(self.faults)
+        end = w.now() + self.duration_ms
+        while w.now() < end:
+            w.run(min(chunk_ms, end - w.now()))
+        for c in self.cables.values():
+            c.plug()  # a cable the plan would plug back after the end
+        self.drain_start = w.now()
+        led = self.ledger
+        limit = w.now() + drain_ms
+        while led.pending() and w.now() < limit:
+            w.run(min(chunk_ms, limit - w.now()), until=lambda: not led.pending())
+        self.drain_ms = w.now() - self.drain_start
+        return self
+
+    def figures(self):
+        c = self.ledger.counts
+        f = {
+            "packets_accepted": c["accepted"],
+            "packets_refused_store_full": c["refused_store_full"],
+            "packets_lost": self.ledger.lost(),
+            "duplicates_delivered": c["duplicates"],
+            "packets_delivered": c["delivered"],
+            "packets_expired": c["status_expired"],
+            "packets_failed": c["status_failed"],
+            "packets_corrupt": c["corrupt"],
+            "extra_final_statuses": c["extra_final"],
+            "packets_pending_at_end": self.ledger.pending(),
+            "task_deaths": sum(self.deaths.values()),
+            "stores_filled": self.stores_full,
+            "simulated_s": self.w.now() // 1000,
+        }
+        for k, v in self.faults.counts.items():
+            if k != "plug":
+                f["faults_" + k] = v
+        return f
+
+    def close(self):
+        for sn in self.sn.values():
+            sn.node.transport.store.close()
+        if self._own_dir:
+            shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def soak(seed=1, hours=24.0, rate_scale=1.0, traffic_scale=1.0, trace=True):
+    # -> (figures, wall seconds)
+    if trace:
+        tracemalloc.start()
+    t0 = time.perf_counter()
+    s = Soak(seed, hours, rate_scale, traffic_scale)
+    try:
+        s.run()
+        f = s.figures()
+    finally:
+        s.close()
+    wall = time.perf_counter() - t0
+    if trace:
+        f["peak_memory_bytes"] = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    return f, wall, s
+
+
+UNITS = {"peak_memory_bytes": "B", "simulated_s": "s"}
+
+
+def run(emit):
+    f, wall, s = soak()
+    for k in ("packets_accepted", "packets_lost", "duplicates_delivered", "peak_memory_bytes"):
+        emit(k, f.pop(k), UNITS.get(k, "packets" if k.startswith("packets") or k.startswith("dup") else "count"))
+    for k in sorted(f):
+        emit("soak_" + k if not k.startswith("packets") else k, f[k], UNITS.get(k, "count"))
+    emit("soak_wall_s", wall, "s")

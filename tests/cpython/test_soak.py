@@ -1,0 +1,24 @@
+# A short soak (acomm_cpython.workloads.soak_workload): the demo network
+# for 1.5 simulated hours with every fault kind at 12 times the 24-hour
+# run's rate, then drained. Every accepted packet must end delivered or
+# reported expired/failed, none delivered twice or damaged, no exception
+# may escape a node's step, and every fault kind must really have happened.
+from acomm_cpython.workloads.soak_workload import RATES, soak
+
+
+def test_short_soak_loses_nothing_and_every_fault_happened():
+    f, wall, s = soak(seed=3, hours=1.5, rate_scale=12, trace=False)
+    assert f["packets_accepted"] > 50
+    assert f["packets_delivered"] > 20
+    assert f["packets_lost"] == 0, f
+    assert f["duplicates_delivered"] == 0, f
+    assert f["packets_corrupt"] == 0 and f["extra_final_statuses"] == 0, f
+    assert f["task_deaths"] == 0, s.deaths
+    assert f["packets_pending_at_end"] == 0
+    for kind in RATES:
+        assert f["faults_" + kind] > 0, kind
+    assert f["packets_refused_store_full"] > 0 and f["stores_filled"] > 0
+    assert s.rebuilt == f["faults_power_loss"]
+    assert sum(c.errors_raised for c in s.cables.values()) > 0  # unplugs that raised
+    assert s.channel.noise_lost > 0
+    assert sum(wc.jumps for wc in s.walls.values()) == f["faults_clock_jump"]
