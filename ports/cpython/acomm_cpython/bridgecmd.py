@@ -18,22 +18,11 @@ from acomm.node import Node
 
 from .imcbridge import ANNOUNCE_GROUP, DATA_PORT, ImcBridge
 from .imcgateway import ImcGateway
+from .ipnode import hostport, keyval
 
 # the link's medium per modem kind: TransmissionRequest.comm_mean picks by it
 MEDIA = {"iridium": "satellite", "gsm": "gsm"}
 _SIM_STEP_MAX_MS = 1000  # simulated ms per loop round at most, so the sockets are read meanwhile
-
-
-def _keyval(text):
-    k, sep, v = text.partition("=")
-    if not sep:
-        raise ValueError("expected KEY=VALUE, got %r" % text)
-    return k, v
-
-
-def _hostport(text):
-    host, _, port = text.rpartition(":")
-    return (host or "127.0.0.1", int(port))
 
 
 def add_arguments(p):
@@ -71,8 +60,8 @@ def add_arguments(p):
 
 
 def _gateways(args, nodes):
-    names = dict(_keyval(kv) for kv in args.map)
-    static = [_hostport(x) for x in args.peer]
+    names = dict(keyval(kv) for kv in args.map)
+    static = [hostport(x, "127.0.0.1") for x in args.peer]
     out = []
     for node in nodes:
         gw = ImcGateway(node, args.imc_id + node.node_id, names=names, static=static, lifespan_s=args.lifespan,
@@ -85,7 +74,7 @@ def _gateways(args, nodes):
 def build_sim(args):
     from acomm_sim.world import World
 
-    specs = [_keyval(x) for x in args.sim_node] or [("topside", "1"), ("auv", "2")]
+    specs = [keyval(x) for x in args.sim_node] or [("topside", "1"), ("auv", "2")]
     world = World(seed=args.seed)
     nodes = []
     for i, (name, nid) in enumerate(specs):
@@ -112,7 +101,7 @@ def _modem_link(node, spec):
     if kind not in MODEMS or not where:
         raise ValueError("--modem %r: KIND:DEVICE[:BAUD] with KIND one of %s" % (spec, ", ".join(sorted(MODEMS))))
     if where.startswith("tcp:"):
-        host, port = _hostport(where[4:])
+        host, port = hostport(where[4:], "127.0.0.1")
         stream = TcpStream(host, port)
     else:
         dev, _, baud = where.partition(":")
@@ -128,7 +117,7 @@ def build_real(args):
         raise ValueError("without --sim, give --name, --id and at least one --modem")
     node = Node(args.name, args.id)
     for kv in args.known:
-        k, v = _keyval(kv)
+        k, v = keyval(kv)
         node.names.add(k, int(v))
     for spec in args.modem:
         _modem_link(node, spec)

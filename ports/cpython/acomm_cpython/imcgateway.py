@@ -282,12 +282,17 @@ class ImcGateway:
                     return link
         return None
 
-    def _submit(self, now, r, link, dst, data, lifespan, ack):
+    def _track(self, r, link):
+        # -> the request id; tracked before the link's call, since a
+        # refusal is reported from inside it
         rid = self.node.next_req_id()
         r.link = link
-        self._reqs[rid] = r  # before the call: a refusal is reported from inside it
+        self._reqs[rid] = r
         self.stats["requests"] += 1
-        link.request(self.node.clock(), rid, dst, data, lifespan, 10, ack)
+        return rid
+
+    def _submit(self, now, r, link, dst, data, lifespan, ack):
+        link.request(self.node.clock(), self._track(r, link), dst, data, lifespan, 10, ack)
 
     def _uam_tx_frame(self, now, ep, pkt):
         m = pkt.msg
@@ -322,11 +327,7 @@ class ImcGateway:
         if link is None:
             code = E.TSTAT_TEMPORARY_FAILURE if r.kind == _KIND_TREQ else E.UTS_INV_ADDR
             return self._refuse(r, code, "no acoustic link reaches %s" % dst)
-        rid = self.node.next_req_id()
-        r.link = link
-        self._reqs[rid] = r
-        self.stats["requests"] += 1
-        link.range(self.node.clock(), rid, [dst], lifespan)
+        link.range(self.node.clock(), self._track(r, link), [dst], lifespan)
 
     def _treq(self, now, ep, pkt):
         m = pkt.msg

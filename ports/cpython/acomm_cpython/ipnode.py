@@ -21,13 +21,13 @@ from .tcp import tcp_client_link, tcp_server_link
 from .udp import DEFAULT_GROUP, DEFAULT_PORT, udp_link
 
 
-def _hostport(text, default_host="0.0.0.0"):
+def hostport(text, default_host="0.0.0.0"):
     # "HOST:PORT", ":PORT" or "PORT" -> (host, port)
     host, _, port = text.rpartition(":")
     return (host or default_host, int(port))
 
 
-def _keyval(text):
+def keyval(text):
     k, sep, v = text.partition("=")
     if not sep:
         raise ValueError("expected KEY=VALUE, got %r" % text)
@@ -106,20 +106,20 @@ def build(args):
     if args.key_file is not None:
         node.set_auth(Auth(load_key(args.key_file), args.tag_len, args.auth_counters))
     for kv in args.known:
-        k, v = _keyval(kv)
+        k, v = keyval(kv)
         node.names.add(k, int(v))
     period_ms = int(args.advert_period * 1000)
     ports = []
     if args.udp is not None:
-        gaddr, gport = _hostport(args.group)
+        gaddr, gport = hostport(args.group)
         peers = {}
         for kv in args.peer:
-            k, v = _keyval(kv)
-            peers[int(k)] = _hostport(v, "127.0.0.1")
+            k, v = keyval(kv)
+            peers[int(k)] = hostport(v, "127.0.0.1")
         link, port = udp_link(
             node,
             "udp",
-            bind=_hostport(args.udp),
+            bind=hostport(args.udp),
             group=None if args.no_multicast else gaddr,
             group_port=gport,
             iface=args.iface,
@@ -130,11 +130,11 @@ def build(args):
         ports.append(port)
         print("udp on %s:%d" % port.address, flush=True)
     if args.tcp_listen is not None:
-        link, port = tcp_server_link(node, "tcp", bind=_hostport(args.tcp_listen), advert_period_ms=period_ms)
+        link, port = tcp_server_link(node, "tcp", bind=hostport(args.tcp_listen), advert_period_ms=period_ms)
         ports.append(port)
         print("tcp listening on %s:%d" % port.address, flush=True)
     if args.tcp_connect is not None:
-        host, p = _hostport(args.tcp_connect, "127.0.0.1")
+        host, p = hostport(args.tcp_connect, "127.0.0.1")
         name = "tcp" if args.tcp_listen is None else "tcp-out"
         link, port = tcp_client_link(node, host, p, name, advert_period_ms=period_ms)
         ports.append(port)
@@ -152,7 +152,7 @@ def main(args):
         print("acomm node: %s" % e, file=sys.stderr)
         return 2
     # --send messages wait until their destination has been heard
-    pending = [_keyval(m) for m in args.send]
+    pending = [keyval(m) for m in args.send]
     deadline = None if args.seconds is None else time.monotonic() + args.seconds
     stdin_open = True
     try:

@@ -24,14 +24,8 @@
 from acomm.errors import AcommError
 from acomm.prng import Prng
 
-try:
-    import time
-
-    _ms = time.ticks_ms
-    _diff = time.ticks_diff
-except AttributeError:
-    _ms = lambda: int(time.monotonic() * 1000)  # noqa: E731
-    _diff = lambda a, b: a - b  # noqa: E731
+from acomm.compat import ticks_diff as _diff
+from acomm.compat import ticks_ms as _ms
 
 
 class Failure(Exception):
