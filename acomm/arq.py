@@ -36,6 +36,7 @@ class Outgoing:
         self.rounds = 0
         self.complete = False
         self.refused = None  # reason byte when the receiver refused
+        self.probing = False  # see probe()
 
     def fragment(self, index, poll):
         # -> (head, bytes): see acomm.segment
@@ -53,6 +54,19 @@ class Outgoing:
         self.rounds += 1
         return self.round
 
+    def probe(self):
+        # The first transfer on a lane since this node started: the
+        # receiver may still hold, on this lane and generation, a transfer
+        # of the node's previous life (it lost power mid-transfer), and
+        # fragments of the new packet would be taken as that one's. So the
+        # first round is a bare poll: a SACK of nothing means the lane is
+        # clear; one that acknowledges anything, or completes another
+        # packet, is stale, and the transfer starts over on the other
+        # generation. One round trip per lane after a start.
+        self.probing = True
+        self.round = [0]
+        self.sent_in_round = 0
+
     def next_fragment(self):
         # -> (index, head, bytes) of the next fragment of the round, poll
         # set on the last one; None when the round is all sent.
@@ -60,6 +74,9 @@ class Outgoing:
             return None
         i = self.round[self.sent_in_round]
         self.sent_in_round += 1
+        if self.probing:
+            head, first = sg.frag_header(True, self.lane, self.gen, i)
+            return i, head, first
         return (i,) + self.fragment(i, self.sent_in_round == len(self.round))
 
     def repoll(self):
@@ -76,6 +93,8 @@ class Outgoing:
         # True when it told us something (the round is over).
         if s.complete:
             if s.reason is not None:
+                if self.probing:
+                    return False  # nothing sent yet: a refusal of another transfer
                 self.refused = s.reason
                 return True
             if s.pid != self.pid or s.base != self.count & 0xFF:
@@ -86,9 +105,21 @@ class Outgoing:
             self.base = self.count
             return True
         base = sg.unwrap(s.base, self.base)
-        if base > self.count:
-            base = self.count
-        elif base < 0:
+        if self.probing:
+            self.probing = False
+            bm = s.bitmap
+            for k in range(len(bm)):
+                base |= bm[k]
+            return base == 0  # anything acknowledged is of another transfer
+        if base >= self.count:
+            # A plain SACK never speaks for a whole packet: the receiver
+            # answers a finished one with its completion (count and pid).
+            # This one is about another transfer the receiver still holds
+            # on this lane and generation: ours restarted (a power loss)
+            # and reused them. Taking it as ours "delivered" a packet the
+            # receiver never had (the soak found one in 24 h).
+            return False
+        if base < 0:
             base = 0
         for i in range(self.base, base):
             self.acked[i] = 1
@@ -105,18 +136,15 @@ class Outgoing:
         while self.base < self.count and self.acked[self.base]:
             self.base += 1
         if self.base == self.count:
-            if base == self.count:
-                self.complete = True  # the completion itself was lost, but nothing is missing
-            else:
-                # Acks of earlier SACKs say all is there and this one says
-                # the receiver lacks fragments from its base on: it lost
-                # them (its reassembly timed out, or it restarted). Those
-                # it does not list go again; trusting the old acks let a
-                # transfer "complete" that the receiver never had.
-                for i in range(base, self.count):
-                    k = i - base - 1
-                    self.acked[i] = 1 if k >= 0 and (k >> 3) < len(bm) and bm[k >> 3] & (1 << (k & 7)) else 0
-                self.base = base
+            # Acks of earlier SACKs say all is there and this one says the
+            # receiver lacks fragments from its base on: it lost them (its
+            # reassembly timed out, or it restarted). Those it does not list
+            # go again; trusting the old acks let a transfer "complete" that
+            # the receiver never had.
+            for i in range(base, self.count):
+                k = i - base - 1
+                self.acked[i] = 1 if k >= 0 and (k >> 3) < len(bm) and bm[k >> 3] & (1 << (k & 7)) else 0
+            self.base = base
         return True
 
 
@@ -134,6 +162,7 @@ class Reassembly:
         self.done_pid = None  # set once complete: the packet id we confirmed
         self._base = 0  # fragments 0.._base-1 have all arrived
         self.unauthed = False  # a fragment came without a valid tag (acomm.auth)
+        self.refused = None  # the reason this transfer was refused, kept for polls
 
     def add(self, index, payload, now):
         # Raises DecodeError for a fragment that contradicts the packet.

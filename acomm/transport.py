@@ -232,6 +232,7 @@ class Transport(Receiving):
         if lane is None:
             return
         gk = (link.name, hop, lane)
+        first = gk not in self._gens  # since this node started
         gen = 1 - self._gens.get(gk, 1)
         self._gens[gk] = gen
         relay = None
@@ -245,7 +246,10 @@ class Transport(Receiving):
             return
         lanes[lane] = p
         p.link, p.hop = link, hop
-        p.out.new_round()
+        if first:
+            p.out.probe()
+        else:
+            p.out.new_round()
 
     # -- sending -------------------------------------------------------------------
     def poll(self, now):
@@ -266,6 +270,10 @@ class Transport(Receiving):
         for p in list(self._out):
             if p.out is not None:
                 self._pump(p, now, p.link in held)
+                # one poll out per link: a second lane's poll right behind
+                # it would be on the air when the first one's SACK comes
+                if p.out is not None and p.polling and p.link not in held:
+                    held.append(p.link)
         self._rx_poll(now)
 
     def _pump(self, p, now, held):
@@ -378,6 +386,15 @@ class Transport(Receiving):
             self._rtt_sample(p, ticks_diff(now, p.polled))
         p.timer = p.polled = None
         p.misses = 0
+        # the answer can come before the link reports the poll sent (a
+        # short poll and SACK on a link with slow statuses): that poll is
+        # answered, so its status must neither hold the link nor start a
+        # wait for a SACK that has already come
+        for rid in self._reqs:
+            q = self._reqs[rid]
+            if q[0] is p and q[2]:
+                self._reqs[rid] = (p, q[1], False)
+                p.polling -= 1
         o = p.out
         if o.refused is not None:
             self.stats["refused"] += 1

@@ -58,6 +58,10 @@ class Receiving:
                 self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
                 return
             r = self._rx[key] = Reassembly(s.gen, self.max_packet + 16, now)
+        if r.refused is not None:
+            if s.poll:
+                self._answer_poll(now, link, src, s, r)
+            return  # the rest of a refused transfer: dropped
         index = r.index_of(s.index)
         if not authed:
             r.unauthed = True  # the packet is as trusted as its weakest fragment
@@ -66,27 +70,32 @@ class Receiving:
             r.add(index, s.payload, now)
         except DecodeError:
             self.stats["rx_bad"] += 1
-            del self._rx[key]
-            self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_TOO_BIG))
-            return
+            return self._refuse(now, link, src, s, key, sg.REFUSE_TOO_BIG)
         if first and r.header is not None and not self._can_take(r.header):
             # a relay without room says so before the rest is sent
-            del self._rx[key]
-            self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
-            return
+            return self._refuse(now, link, src, s, key, sg.REFUSE_FULL)
         if r.done_pid is None and r.complete():
             if not self._arrived(now, link, src, r):
-                del self._rx[key]
-                self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
-                return
+                return self._refuse(now, link, src, s, key, sg.REFUSE_FULL)
         if s.poll or (r.done_pid is not None and index == r.count - 1):
             self._answer_poll(now, link, src, s, r)
+
+    def _refuse(self, now, link, src, s, key, reason):
+        # The fragments go, a marker stays: the refusal may be sent while
+        # the sender is still on the air with the rest of its round (half-
+        # duplex: deaf), so its poll gets the refusal again, not "all
+        # missing", which would have it send everything once more.
+        m = self._rx[key] = Reassembly(s.gen, 0, now)
+        m.refused = reason
+        self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, reason))
 
     def _answer_poll(self, now, link, src, s, r):
         if r is None or r.gen != s.gen:
             # a bare poll for a transfer we have nothing of (our memory of
             # it timed out, or this node restarted): all is missing
             self._sack(now, link, src, sg.sack(s.lane, s.gen, 0))
+        elif r.refused is not None:
+            self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, r.refused))
         elif r.done_pid is not None:
             self._sack(now, link, src, sg.sack_complete(s.lane, s.gen, r.count, r.done_pid))
         else:

@@ -182,6 +182,10 @@ def test_a_command_in_a_transport_packet_needs_every_fragment_authenticated():
     wall = lambda: w.now() // 1000  # noqa: E731
     for name in n:
         Transport(n[name].node, wall=wall)
+    # an attacker sends its fragments without waiting for the lane probe
+    # of a node's first transfer (acomm.arq.Outgoing.probe), which it could
+    # not hear the answer to anyway
+    n["stranger"].node.transport._gens[("acoustic", 1, 0)] = 1
     start = seaware.encode(2, "start_mission")
     n["topside"].node.transport.send(w.now(), "auv", start, 600, 5)
     w.run(60000)

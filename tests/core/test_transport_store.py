@@ -3,6 +3,8 @@
 # ids never reused, duplicates suppressed when a restarted sender sends a
 # delivered packet again, big packets in several records, and the store's
 # overflow rule (acomm.packetstore) at the sender and at a relay.
+from acomm import segment as sg
+from acomm.arq import Outgoing
 from acomm.errors import StoreFull
 from acomm.events import DELIVERED, EXPIRED, FAILED, QUEUED, TRANSMITTED
 from acomm.packetstore import MemoryStore, PacketStore
@@ -76,6 +78,49 @@ def test_a_restarted_sender_is_not_confused_by_the_receivers_lane_memory():
     p2 = t2.send(w.now(), "buoy", b"second", 3600, 5)
     assert w.run(600000, until=lambda: DELIVERED in statuses(a, p2))
     assert [e[3] for e in packets(b)] == [b"first", b"second"]
+
+
+def test_a_sender_restarted_mid_transfer_meets_the_receivers_half_packet():
+    # Found by the soak: the sender loses power with half of a long packet
+    # at the receiver (lane 0, generation 0). Restarted, it sends a short
+    # packet on lane 0 at generation 0 again; the receiver's SACK for the
+    # half packet acknowledged more than the short one has, and the sender
+    # took the short one as delivered. Now the first transfer on a lane
+    # after a start probes it first, and a plain SACK that covers a whole
+    # packet is never taken as its completion.
+    w, a, b, _, ta = net()
+    long = Prng(9).bytes(300)
+    p1 = ta.send(w.now(), "buoy", long, 3600, 5)
+    tb = b.node.transport
+    assert w.run(600000, until=lambda: len(getattr(tb._rx.get(("acoustic", 2, 0)), "frags", ())) >= 4)
+    q = a.node.links["acoustic"].queue
+    for r in list(q):
+        q.cancel(r.req_id)  # the power went, and the queue to the modem with it
+    t2 = _restart(a, w, ta.store)
+    # the restarted sender has the long packet back from its store, and an
+    # urgent short one that goes first: on lane 0, generation 0
+    p2 = t2.send(w.now(), "buoy", b"short status", 3600, 1)
+    assert w.run(900000, until=lambda: DELIVERED in statuses(a, p2) and DELIVERED in statuses(a, p1))
+    assert sorted(e[3] for e in packets(b)) == sorted([long, b"short status"])
+
+
+def test_a_plain_sack_never_completes_a_packet():
+    o = Outgoing(b"x" * 50, 28, 0, 0, 7)  # 2 fragments
+    o.new_round()
+    assert not o.on_sack(sg.decode(*sg.sack(0, 0, 5)))  # 5 fragments "arrived": another transfer's
+    assert not o.on_sack(sg.decode(*sg.sack(0, 0, 2)))  # all of it, but not as a completion
+    assert not o.complete
+    assert o.on_sack(sg.decode(*sg.sack_complete(0, 0, 2, 7))) and o.complete
+    # probing: a SACK of nothing clears the lane; anything else is stale
+    for seg, clear in ((sg.sack(0, 0, 0), True), (sg.sack(0, 0, 1), False), (sg.sack(0, 0, 0, b"\x01"), False),
+                       (sg.sack_refused(0, 0, sg.REFUSE_FULL), False), (sg.sack_complete(0, 0, 3, 6), False)):
+        o = Outgoing(b"x" * 50, 28, 0, 0, 7)
+        o.probe()
+        assert o.next_fragment() == (0,) + sg.frag_header(True, 0, 0, 0)  # a bare poll
+        assert o.on_sack(sg.decode(*seg)) == clear and not o.complete and o.refused is None
+    o = Outgoing(b"x" * 50, 28, 0, 0, 7)
+    o.probe()
+    assert o.on_sack(sg.decode(*sg.sack_complete(0, 0, 2, 7))) and o.complete  # ours, from before the restart
 
 
 def test_packet_ids_survive_a_restart_without_a_write_per_packet():
