@@ -55,9 +55,10 @@ class Outgoing:
         return self.round
 
     def probe(self):
-        # The first transfer on a lane since this node started: the
-        # receiver may still hold, on this lane and generation, a transfer
-        # of the node's previous life (it lost power mid-transfer), and
+        # The first transfer on a lane since this node started with packets
+        # from its store: the receiver may still hold, on this lane and
+        # generation, a transfer of the node's previous life (it lost power
+        # mid-transfer), and
         # fragments of the new packet would be taken as that one's. So the
         # first round is a bare poll: a SACK of nothing means the lane is
         # clear; one that acknowledges anything, or completes another

@@ -166,7 +166,11 @@ class Transport(Receiving):
         self._out.sort(key=lambda q: q.prio)
 
     def _recover(self):
+        # packets back from the store mean a life before this one with
+        # transfers cut short: their lanes are probed first (_start)
+        self._resumed = False
         for s in self.packets.recover():
+            self._resumed = True
             p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, s.body, s.compressed, s.medium)
             p.chunks = s.chunks
             self._queue(p)
@@ -232,7 +236,9 @@ class Transport(Receiving):
         if lane is None:
             return
         gk = (link.name, hop, lane)
-        first = gk not in self._gens  # since this node started
+        # the first transfer on this lane since a start that resumed
+        # packets: the receiver may hold half of one (acomm.arq probe())
+        first = self._resumed and gk not in self._gens
         gen = 1 - self._gens.get(gk, 1)
         self._gens[gk] = gen
         relay = None

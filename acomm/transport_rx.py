@@ -58,11 +58,15 @@ class Receiving:
                 self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, sg.REFUSE_FULL))
                 return
             r = self._rx[key] = Reassembly(s.gen, self.max_packet + 16, now)
-        if r.refused is not None:
-            if s.poll:
-                self._answer_poll(now, link, src, s, r)
-            return  # the rest of a refused transfer: dropped
         index = r.index_of(s.index)
+        if r.refused is not None:
+            if index != 0:
+                if s.poll:
+                    self._answer_poll(now, link, src, s, r)
+                return  # the rest of a refused transfer: dropped
+            # a fragment 0 starts the packet over: judged afresh (and a
+            # forged refusal cannot block the real sender's lane)
+            r = self._rx[key] = Reassembly(s.gen, self.max_packet + 16, now)
         if not authed:
             r.unauthed = True  # the packet is as trusted as its weakest fragment
         try:
