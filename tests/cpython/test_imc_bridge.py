@@ -148,8 +148,10 @@ def test_announce_on_the_multicast_group_and_the_loopback():
             assert not info["multicast"], "the gateway joined the group where the test cannot"
         want = "imc+udp://127.0.0.1:%d/" % sysinfo["port"]
         for s in socks:
-            got = _collect(s, lambda g: g, 3)
-            assert got, "no Announce on %s" % (s.getsockname(),)
+            # two of them, sent at different times: the Announce is
+            # periodic (every 0.5 s here)
+            got = _collect(s, lambda g: len(set(x[1].timestamp for x in g)) >= 2, 5)
+            assert len(set(x[1].timestamp for x in got)) >= 2, "%d Announces on %s" % (len(got), s.getsockname())
             src, pkt = got[0]
             m = pkt.msg
             assert m["abbrev"] == "Announce" and m["sys_name"] == "buoy", m
@@ -162,7 +164,7 @@ def test_announce_on_the_multicast_group_and_the_loopback():
         for s in socks:
             s.close()
         report = _finish(p)
-    assert report["bridge"]["announce_loopback"] >= 5
+    assert report["bridge"]["announce_loopback"] >= 2  # as many as the loopback listener heard, at least
 
 
 def test_real_modem_path_against_an_emulated_seatrac_on_a_pty(tmp_path):
