@@ -18,8 +18,26 @@ def add_arguments(p):
     p.add_argument("--list", action="store_true", help="list the targets and exit")
 
 
+def _bad_args(args):
+    # -> what is wrong with the arguments, or None
+    if args.seconds <= 0:
+        return "--seconds must be positive, not %g" % args.seconds
+    if args.cases is not None and args.cases <= 0:
+        return "--cases must be positive, not %d" % args.cases
+    if args.case is not None and (args.case < 0 or not args.target):
+        return "--case needs a number >= 0 and --target"
+    return None
+
+
 def main(args):
+    import sys
+
     from acomm_sim import fuzz
+
+    bad = _bad_args(args)
+    if bad:
+        print("acomm fuzz: " + bad, file=sys.stderr)
+        return 2
 
     with tempfile.TemporaryDirectory(prefix="acomm-fuzz-") as tmp:
         targets = fuzz.all_targets(args.target, tmp)
@@ -28,7 +46,7 @@ def main(args):
                 print(t.name)
             return 0
         if not targets:
-            print("no such target: %s" % ", ".join(args.target))
+            print("acomm fuzz: no such target: %s (--list names them)" % ", ".join(args.target), file=sys.stderr)
             return 2
         if args.case is not None:
             bad = 0
