@@ -33,7 +33,7 @@ class Guard:
 def catalog_check(catalog, names, unwrap=None):
     # -> check(payload): a message named in `names` is among those the
     # catalog unpacks from the payload (after unwrap, e.g. a packet header)
-    names = frozenset(names)
+    names = tuple(names)  # a handful: a tuple, which every port has
 
     def check(payload):
         body = unwrap(payload) if unwrap is not None else payload
