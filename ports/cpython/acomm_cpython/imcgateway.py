@@ -294,14 +294,25 @@ class ImcGateway:
     def _submit(self, now, r, link, dst, data, lifespan, ack):
         link.request(self.node.clock(), self._track(r, link), dst, data, lifespan, 10, ack)
 
-    def _uam_tx_frame(self, now, ep, pkt):
+    def _begin(self, kind, key, ep, pkt, dst_field, inv_addr):
+        # -> (request, destination id), or None when it was refused (busy,
+        # or a destination we do not know, answered with inv_addr)
         m = pkt.msg
-        r = _Req(_KIND_UAM, m["seq"], ep, pkt)
+        r = _Req(kind, m[key], ep, pkt)
         if self._busy(r):
-            return
-        dst = self._dst_id(m["sys_dst"])
+            return None
+        dst = self._dst_id(m[dst_field])
         if dst is None:
-            return self._refuse(r, E.UTS_INV_ADDR, "unknown system %r" % m["sys_dst"])
+            self._refuse(r, inv_addr, "unknown system %r" % m[dst_field])
+            return None
+        return r, dst
+
+    def _uam_tx_frame(self, now, ep, pkt):
+        got = self._begin(_KIND_UAM, "seq", ep, pkt, "sys_dst", E.UTS_INV_ADDR)
+        if got is None:
+            return
+        r, dst = got
+        m = pkt.msg
         link = self._link_for(("acoustic",), dst, None)
         if link is None:
             return self._refuse(r, E.UTS_INV_ADDR, "no acoustic link reaches %r" % m["sys_dst"])
@@ -313,12 +324,12 @@ class ImcGateway:
         self._submit(now, r, link, dst, data, self.lifespan_s, ack)
 
     def _uam_tx_range(self, now, ep, pkt):
-        m = pkt.msg
-        r = _Req(_KIND_RANGE, m["seq"], ep, pkt)
-        if self._busy(r):
+        got = self._begin(_KIND_RANGE, "seq", ep, pkt, "sys_dst", E.UTS_INV_ADDR)
+        if got is None:
             return
-        dst = self._dst_id(m["sys_dst"])
-        if dst is None or dst == BROADCAST:
+        r, dst = got
+        m = pkt.msg
+        if dst == BROADCAST:
             return self._refuse(r, E.UTS_INV_ADDR, "cannot range %r" % m["sys_dst"])
         self._range(now, r, ("acoustic",), dst, m["timeout"] if m["timeout"] > 0 else self.lifespan_s)
 
@@ -330,16 +341,14 @@ class ImcGateway:
         link.range(self.node.clock(), self._track(r, link), [dst], lifespan)
 
     def _treq(self, now, ep, pkt):
-        m = pkt.msg
-        r = _Req(_KIND_TREQ, m["req_id"], ep, pkt)
-        if self._busy(r):
+        got = self._begin(_KIND_TREQ, "req_id", ep, pkt, "destination", E.TSTAT_INV_ADDR)
+        if got is None:
             return
+        r, dst = got
+        m = pkt.msg
         media = _MEANS.get(m["comm_mean"])
         if media is None:
             return self._refuse(r, E.TSTAT_INPUT_FAILURE, "comm_mean %d is not served here" % m["comm_mean"])
-        dst = self._dst_id(m["destination"])
-        if dst is None:
-            return self._refuse(r, E.TSTAT_INV_ADDR, "unknown system %r" % m["destination"])
         life = m["deadline"] - self.wall()
         if life <= 0:
             return self._refuse(r, E.TSTAT_TEMPORARY_FAILURE, "Transmission timed out")
