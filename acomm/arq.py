@@ -58,12 +58,11 @@ class Outgoing:
         # The first transfer on a lane since this node started with packets
         # from its store: the receiver may still hold, on this lane and
         # generation, a transfer of the node's previous life (it lost power
-        # mid-transfer), and
-        # fragments of the new packet would be taken as that one's. So the
-        # first round is a bare poll: a SACK of nothing means the lane is
-        # clear; one that acknowledges anything, or completes another
-        # packet, is stale, and the transfer starts over on the other
-        # generation. One round trip per lane after a start.
+        # mid-transfer), and fragments of the new packet would be taken as
+        # that one's. So the first round is a bare poll: a SACK of nothing
+        # means the lane is clear; one that acknowledges anything, refuses,
+        # or completes another packet is stale, and the transfer starts over
+        # on the other generation. One round trip per lane after such a start.
         self.probing = True
         self.round = [0]
         self.sent_in_round = 0
@@ -107,11 +106,9 @@ class Outgoing:
             return True
         base = sg.unwrap(s.base, self.base)
         if self.probing:
+            # anything acknowledged is of another transfer
             self.probing = False
-            bm = s.bitmap
-            for k in range(len(bm)):
-                base |= bm[k]
-            return base == 0  # anything acknowledged is of another transfer
+            return base == 0 and not any(s.bitmap)
         if base >= self.count:
             # A plain SACK never speaks for a whole packet: the receiver
             # answers a finished one with its completion (count and pid).

@@ -17,8 +17,20 @@ from .errors import AcommError
 
 
 class Guard:
+    REFUSED = "command without a valid authentication tag"  # EV_REFUSED's reason
+
     def __init__(self, checks):
         self.checks = tuple(checks)
+
+    def admits(self, payload, authed, auth):
+        # -> whether the payload may be passed on: not a command, or a
+        # command that verified, whose counter then goes to the file before
+        # it is carried out (a restart cannot make a recording of it fresh)
+        if not self.is_command(payload):
+            return True
+        if authed:
+            auth.commit()
+        return authed
 
     def is_command(self, payload):
         for check in self.checks:

@@ -571,14 +571,10 @@ class Link(Ranging):
         if self._dups.seen(key, f.seq, now):
             self.stats["rx_duplicates"] += 1
             return
-        if self.guard is not None and self.guard.is_command(f.payload):
-            if not f.authed:
-                self.stats["refused"] += 1
-                self._emit((EV_REFUSED, self, self.names.name_of(src), "command without a valid authentication tag"))
-                return
-            # its counter goes to flash before the command is carried out,
-            # so a restart cannot make a recording of it fresh again
-            self.framing.auth.commit()
+        if self.guard is not None and not self.guard.admits(f.payload, f.authed, self.framing.auth):
+            self.stats["refused"] += 1
+            self._emit((EV_REFUSED, self, self.names.name_of(src), self.guard.REFUSED))
+            return
         self._emit(
             (
                 EV_RECEIVED,

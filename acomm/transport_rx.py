@@ -153,17 +153,12 @@ class Receiving:
             self._remember(origin, h.pid, False)
             names = self.node.names
             g = self.node.guard
-            if g is not None and g.is_command(data):
-                if r.unauthed:
-                    self.stats["refused_unauthed"] += 1
-                    self._emit((EV_REFUSED, None, names.name_of(origin), "command without a valid authentication tag"))
-                    self._save_done()
-                    r.done_pid = h.pid
-                    r.frags = {}
-                    return True
-                self.node.auth.commit()  # see Link: before it is carried out
-            self.stats["received"] += 1
-            self._emit((EV_PACKET, names.name_of(origin), names.name_of(final), data))
+            if g is not None and not g.admits(data, not r.unauthed, self.node.auth):
+                self.stats["refused_unauthed"] += 1
+                self._emit((EV_REFUSED, None, names.name_of(origin), g.REFUSED))
+            else:
+                self.stats["received"] += 1
+                self._emit((EV_PACKET, names.name_of(origin), names.name_of(final), data))
             # saved after the application has it: a power cut in between
             # gives at worst a second delivery, never a packet acknowledged
             # that nobody saw
