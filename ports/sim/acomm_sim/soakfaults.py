@@ -17,6 +17,7 @@
 # CPython only (heapq); the core never imports this.
 
 import heapq
+import math
 
 from acomm.prng import Prng
 
@@ -26,20 +27,16 @@ class Cable:
         self.end = end  # the node's end of the serial line (a FakeUART)
         self.out = False  # unplugged
         self.raises = True  # while out: OSError (True) or silence (False)
-        self.unplugs = 0
         self.errors_raised = 0
-        self.bytes_lost = 0
 
     def unplug(self, raises):
         self.out = True
         self.raises = raises
-        self.unplugs += 1
 
     def plug(self):
         self.out = False
 
-    def _dead(self, n):
-        self.bytes_lost += n
+    def _dead(self):
         if self.raises:
             self.errors_raised += 1
             raise OSError(5, "serial cable unplugged")
@@ -48,14 +45,14 @@ class Cable:
         if self.out:
             # the modem's bytes fall on the floor; the World's end is
             # drained so that it does not keep the node awake
-            d = self.end.read()
-            self._dead(len(d) if d else 0)
+            self.end.read()
+            self._dead()
             return None
         return self.end.read(n)
 
     def write(self, data):
         if self.out:
-            self._dead(len(data))
+            self._dead()
             return len(data)
         return self.end.write(data)
 
@@ -99,7 +96,7 @@ class FaultPlan:
             t = start
             while True:
                 # -ln(u) * mean: an exponential gap (u in (0, 1])
-                t += int(_exp(rng) * mean_ms) + 1
+                t += int(exp_gap(rng) * mean_ms) + 1
                 if t >= start + duration_ms:
                     break
                 name = names[rng.below(len(names))]
@@ -120,12 +117,7 @@ class FaultPlan:
             self.on_fault(now, kind, name, param)
         return h[0][0] if h else now + 3600000
 
-    def cancel(self):
-        self._heap = []
-
-
-def _exp(rng):
-    import math
-
+def exp_gap(rng):
+    # -ln(u) for u uniform in (0, 1]: an exponential gap of mean 1
     u = (rng.below(1 << 30) + 1) / float(1 << 30)
     return -math.log(u)

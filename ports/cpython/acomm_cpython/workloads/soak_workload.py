@@ -44,7 +44,7 @@ from acomm.store import Store
 from acomm.transport import Transport
 from acomm_sim.channel import Channel
 from acomm_sim.ledger import Ledger
-from acomm_sim.soakfaults import Cable, FaultPlan, WallClock
+from acomm_sim.soakfaults import Cable, FaultPlan, WallClock, exp_gap
 from acomm_sim.world import MODEMS, World
 
 from ..demo.mission import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
@@ -227,9 +227,7 @@ class Soak:
         big = r.chance(0.3)
         size = r.range(40, 240) if big else r.range(6, 26)
         self._send(src, self._other(src), size, LIFESPANS[r.below(len(LIFESPANS))], r.range(1, 14), now)
-        from acomm_sim.soakfaults import _exp
-
-        return now + 1000 + int(_exp(r) * self.traffic_period_ms)
+        return now + 1000 + int(exp_gap(r) * self.traffic_period_ms)
 
     # -- running -------------------------------------------------------------
     def run(self, drain_ms=3 * 3600000, chunk_ms=600000):
@@ -241,12 +239,10 @@ class Soak:
             w.run(min(chunk_ms, end - w.now()))
         for c in self.cables.values():
             c.plug()  # a cable the plan would plug back after the end
-        self.drain_start = w.now()
         led = self.ledger
         limit = w.now() + drain_ms
         while led.pending() and w.now() < limit:
             w.run(min(chunk_ms, limit - w.now()), until=lambda: not led.pending())
-        self.drain_ms = w.now() - self.drain_start
         return self
 
     def figures(self):
