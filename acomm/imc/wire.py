@@ -73,7 +73,11 @@ _F32 = const(7)
 _U64 = const(8)
 _HDR = const(9)
 _CRC = const(10)
-_F32_OVER = 3.4028235677973366e38
+# Built at import from a string: a float literal this large cannot be
+# frozen (mpy-tool also emits every float constant for single-precision
+# object layouts, where it overflows), and the string keeps every digit
+# where mpy-tool's %.16g would change it by an ulp.
+_F32_OVER = float("3.4028235677973366e38")
 
 
 def check_int(code, v):

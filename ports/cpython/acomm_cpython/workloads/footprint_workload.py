@@ -2,7 +2,7 @@
 #
 # The buoy's node (boards/buoy_pico: node, links, SeaTrac and Iridium
 # drivers, transport, a store on a file) runs alone in the MicroPython unix
-# port (tools/board_lockstep.py), from the .mpy files `acomm flash` would
+# port (tools/lockstep/acomm_lockstep.py), from the .mpy files `acomm flash` would
 # copy (compiled for x64 so the host can load them), stepped in lock with
 # a simulated ocean in this process with the buoy's peers and traffic of
 # acomm_sim.boardsim: a diver's SeaTrac beacon, whose packet for shore the
@@ -23,7 +23,7 @@
 #   heap_peak_bytes   gc.mem_alloc() at its highest, at a roomy heap, in
 #                     32-bit terms (the unix port is 64-bit: halved)
 #   heap_min_romfs_bytes   the same with the modules imported from a ROMFS
-#                     image (tools/board_lockstep.py mounts it as a VfsRom):
+#                     image (tools/lockstep/acomm_lockstep.py mounts it as a VfsRom):
 #                     the bytecode runs in place, as on a board with a ROMFS
 #                     partition (`mpremote romfs deploy`); what stays in RAM
 #                     is the modules' objects (functions, classes, dicts,
@@ -135,7 +135,7 @@ def run_once(flash_dir, heap, seed=1, rom=None):
     tmp = tempfile.mkdtemp(prefix="acomm-footprint-store-")
     env = dict(os.environ)
     env["MICROPYPATH"] = ".frozen" if rom else ".frozen:" + os.path.join(flash_dir, "lib")
-    args = [_mp(), "-X", _heap_flag(heap, rom and os.path.getsize(rom)), boardfiles.repo_root() + "/tools/board_lockstep.py",
+    args = [_mp(), "-X", _heap_flag(heap, rom and os.path.getsize(rom)), boardfiles.repo_root() + "/tools/lockstep/acomm_lockstep.py",
             os.path.join(flash_dir, "config.py"), os.path.join(tmp, "store")]
     proc = subprocess.Popen(args + ([rom] if rom else []),
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)

@@ -4,7 +4,7 @@
 # drivers, transport, store), not the emulators or the other nodes, so
 # `-X heapsize=` finds the board's own smallest heap.
 #
-#   micropython -X heapsize=24wk tools/board_lockstep.py /path/config.py /tmp/store [rom.img]
+#   micropython -X heapsize=24wk tools/lockstep/acomm_lockstep.py /path/config.py /tmp/store [rom.img]
 #
 # With rom.img (a ROMFS image of the board's lib/, `mpremote romfs build`)
 # the modules are imported from a VfsRom mounted at /rom, so their bytecode
@@ -34,10 +34,7 @@ def _mount_rom(path):
     return img
 
 
-_ROM = _mount_rom(sys.argv[3]) if len(sys.argv) > 3 else None
-
-from acomm_mp import release  # noqa: E402
-from acomm_mp.assemble import build  # noqa: E402
+_ROM = None
 
 
 class _Uart:
@@ -116,7 +113,14 @@ def _store(path):
     return open_store
 
 
-def main(path, store_path):
+def main(path, store_path, rom=None):
+    """Runs the board of config file `path` in lock with the ocean on stdin/stdout until b"Q"."""
+    global _ROM
+    if rom:
+        _ROM = _mount_rom(rom)
+    from acomm_mp import release
+    from acomm_mp.assemble import build
+
     g = {}
     with open(path) as f:
         exec(f.read(), g)
@@ -188,4 +192,5 @@ def main(path, store_path):
              sum(u.overruns for u in ports)))
 
 
-main(sys.argv[1], sys.argv[2])
+if __name__ == "__main__":
+    main(*sys.argv[1:4])

@@ -1,0 +1,361 @@
+#!/usr/bin/env python3
+# Builds MicroPython firmware with acomm frozen in, into build/firmware/:
+#
+#   cm3-plain.elf   qemu MPS2-AN385 (Cortex-M3), a filesystem and no acomm:
+#                   the board `acomm flash` copies modules to
+#   cm3-buoy.elf    the same with the buoy's import closure frozen
+#                   (ports/micropython/manifests/buoy_pico.py): how a
+#                   production buoy is built; flash_text_bytes compares it
+#                   with cm3-plain
+#   cm3-full.elf    every module of acomm and acomm_mp frozen, and the
+#                   footprint harness (tools/lockstep/): the core suite and
+#                   the frozen heap figures run on it
+#   micropython-i386  the unix port built for i386 (-m32), full manifest
+#   mpy-cross       the matching cross compiler
+#
+#   python3 tools/firmware.py build [--only NAME]   build what is stale
+#   python3 tools/firmware.py check                 exit 0 when a build can
+#                   run here, else print one line saying what is missing
+#
+# The MicroPython source: $MPY_DIR (a checkout of micropython/micropython;
+# tested with v1.29.0-preview 1c3c201149), else the subset tarball in
+# ../shared/vendor/ next to the repository, else a shallow git clone where
+# the network allows it. The build never writes into that tree: it makes a
+# shadow tree in build/mpy-src/ (links to py/, extmod/, shared/, lib/,
+# tools/; copies of mpy-cross/ and the two ports) and applies the project's
+# patch (ports/micropython/firmware/qemu-mps2.patch) to the copy.
+#
+# Each product is rebuilt only when its key changes: a hash of the
+# MicroPython source's identity and of every file that goes into it.
+# The Debian packages the builds need are installed with apt-get when they
+# are missing and this runs as root; otherwise it says which to install.
+import argparse
+import glob
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+import tarfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BUILD = os.path.join(ROOT, "build")
+OUT = os.path.join(BUILD, "firmware")
+FW = os.path.join(ROOT, "ports", "micropython", "firmware")
+PATCH = os.path.join(FW, "qemu-mps2.patch")
+TESTED = "v1.29.0-preview (1c3c201149)"
+GIT_URL = "https://github.com/micropython/micropython"
+APT = ("gcc-arm-none-eabi", "libnewlib-arm-none-eabi", "qemu-system-arm", "gcc-multilib")
+# The largest heap the qemu builds can be given; a smaller one is set at
+# boot (ports/micropython/firmware/qemu-mps2.patch), so one build serves
+# the test suite (big heap) and the footprint bisection (small ones).
+QEMU_HEAP = 2 * 1024 * 1024
+JOBS = str(max(2, os.cpu_count() or 2))
+
+# name -> (port, manifest parts); parts: "boot" (the qemu board's
+# _boot.py), "asyncio", "full" (ports/micropython/manifest.py), "harness"
+# (tools/lockstep), or "board:NAME" (ports/micropython/manifests/NAME.py)
+PRODUCTS = {
+    "cm3-plain": ("qemu", ("boot", "asyncio")),
+    "cm3-buoy": ("qemu", ("boot", "board:buoy_pico")),
+    "cm3-full": ("qemu", ("boot", "full", "harness")),
+    "micropython-i386": ("unix", ("full", "harness")),
+}
+
+
+class Missing(Exception):
+    """What a build here lacks, in one line that says how to get it."""
+
+
+def say(msg):
+    print("firmware: " + msg, flush=True)
+
+
+# --- the MicroPython source ---------------------------------------------------
+
+
+def _vendor_tarball():
+    for d in (os.environ.get("ACOMM_SHARED"), os.path.join(os.path.dirname(ROOT), "shared")):
+        if d:
+            hits = sorted(glob.glob(os.path.join(d, "vendor", "micropython-*.tar.gz")))
+            if hits:
+                return hits[-1]
+    return None
+
+
+def _sha(path, h=None):
+    h = h or hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 16), b""):
+            h.update(chunk)
+    return h
+
+
+def source():
+    """(root of a MicroPython tree, identity string); Missing when none can be had."""
+    mpy = os.environ.get("MPY_DIR")
+    if mpy:
+        mpy = os.path.abspath(mpy)
+        if not os.path.isfile(os.path.join(mpy, "py", "mpconfig.h")):
+            raise Missing("MPY_DIR=%s is not a MicroPython source tree (no py/mpconfig.h)" % mpy)
+        head = ""
+        try:
+            head = subprocess.run(["git", "-C", mpy, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+        except OSError:
+            pass
+        return mpy, "dir:%s:%s:%s" % (mpy, head, _sha(os.path.join(mpy, "py", "mpconfig.h")).hexdigest())
+    tar = _vendor_tarball()
+    if tar:
+        digest = _sha(tar).hexdigest()
+        dest = os.path.join(BUILD, "mpy-src", "vendor-" + digest[:12])
+        if not os.path.isfile(os.path.join(dest, "micropython", "py", "mpconfig.h")):
+            say("unpacking %s" % os.path.basename(tar))
+            shutil.rmtree(dest, ignore_errors=True)
+            os.makedirs(dest)
+            with tarfile.open(tar) as t:
+                t.extractall(dest)
+        return os.path.join(dest, "micropython"), "tar:" + digest
+    dest = os.path.join(BUILD, "mpy-src", "git")
+    if not os.path.isfile(os.path.join(dest, "py", "mpconfig.h")):
+        if shutil.which("git") is None:
+            raise Missing("no MicroPython source: set MPY_DIR to a checkout of %s" % GIT_URL)
+        say("cloning %s (no MPY_DIR, no vendored tarball)" % GIT_URL)
+        shutil.rmtree(dest, ignore_errors=True)
+        r = subprocess.run(["git", "clone", "-q", "--depth", "1", GIT_URL, dest], capture_output=True, text=True,
+                           timeout=300)
+        if r.returncode != 0:
+            shutil.rmtree(dest, ignore_errors=True)
+            raise Missing("no MicroPython source: set MPY_DIR to a checkout of %s (cloning it failed: %s)"
+                          % (GIT_URL, (r.stderr.strip().splitlines() or ["?"])[-1]))
+    head = subprocess.run(["git", "-C", dest, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    return dest, "git:" + head
+
+
+def shadow(src, ident):
+    """A tree in build/ to build in: links to src's shared parts, copies of what is built or patched."""
+    key = hashlib.sha256((ident + _sha(PATCH).hexdigest()).encode()).hexdigest()[:12]
+    dest = os.path.join(BUILD, "mpy-src", "tree-" + key)
+    stamp = os.path.join(dest, ".patched")
+    if os.path.exists(stamp):
+        return dest
+    shutil.rmtree(dest, ignore_errors=True)
+    os.makedirs(os.path.join(dest, "ports"))
+    for d in ("py", "extmod", "shared", "lib", "tools", "drivers"):
+        if os.path.exists(os.path.join(src, d)):
+            os.symlink(os.path.join(src, d), os.path.join(dest, d))
+    ign = shutil.ignore_patterns("build", "build-*")
+    shutil.copytree(os.path.join(src, "mpy-cross"), os.path.join(dest, "mpy-cross"), ignore=ign, symlinks=True)
+    for port in ("qemu", "unix"):
+        shutil.copytree(os.path.join(src, "ports", port), os.path.join(dest, "ports", port), ignore=ign, symlinks=True)
+    r = subprocess.run(["patch", "-p1", "-s", "-N", "-d", os.path.join(dest, "ports"), "-i", PATCH],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        raise Missing("%s does not apply to the MicroPython source at %s (tested with %s): %s"
+                      % (os.path.relpath(PATCH, ROOT), src, TESTED, (r.stdout + r.stderr).strip()[:300]))
+    open(stamp, "w").close()
+    return dest
+
+
+# --- tools --------------------------------------------------------------------
+
+
+def _missing_tools():
+    miss = []
+    if shutil.which("arm-none-eabi-gcc") is None:
+        miss.append("gcc-arm-none-eabi")
+    else:
+        libc = subprocess.run(["arm-none-eabi-gcc", "-print-file-name=libc.a"], capture_output=True, text=True).stdout
+        if not os.path.isabs(libc.strip()):
+            miss.append("libnewlib-arm-none-eabi")
+    if shutil.which("qemu-system-arm") is None:
+        miss.append("qemu-system-arm")
+    if not glob.glob("/usr/lib/gcc/*/*/32/libgcc.a"):
+        miss.append("gcc-multilib")
+    for tool, pkg in (("make", "make"), ("gcc", "gcc"), ("patch", "patch")):
+        if shutil.which(tool) is None:
+            miss.append(pkg)
+    return miss
+
+
+def ensure_tools(install=True):
+    """Installs the missing Debian packages when root can; Missing says which otherwise."""
+    miss = _missing_tools()
+    if not miss:
+        return
+    can = install and hasattr(os, "geteuid") and os.geteuid() == 0 and shutil.which("apt-get")
+    if not can:
+        raise Missing("missing %s: run 'apt-get install %s' as root" % (", ".join(miss), " ".join(miss)))
+    say("installing %s" % " ".join(miss))
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    cmd = ["apt-get", "install", "-y", "-q", "--no-install-recommends"] + miss
+    if subprocess.run(cmd, env=env, capture_output=True).returncode != 0:
+        subprocess.run(["apt-get", "update", "-q"], env=env, capture_output=True)
+        r = subprocess.run(cmd, env=env, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise Missing("apt-get install %s failed: %s" % (" ".join(miss), (r.stderr.strip().splitlines() or ["?"])[-1]))
+    still = _missing_tools()
+    if still:
+        raise Missing("still missing after apt-get: %s" % ", ".join(still))
+
+
+# --- manifests and keys -------------------------------------------------------
+
+
+def _manifest(parts):
+    lines = ["# generated by tools/firmware.py for one product; do not edit"]
+    for p in parts:
+        if p == "boot":
+            lines.append("freeze(%r, %r)" % (FW, "_boot.py"))
+        elif p == "asyncio":
+            lines.append('include("$(MPY_DIR)/extmod/asyncio")')
+        elif p == "full":
+            lines.append("include(%r)" % os.path.join(ROOT, "ports", "micropython", "manifest.py"))
+        elif p == "harness":
+            lines.append("freeze(%r, %r)" % (os.path.join(ROOT, "tools", "lockstep"), "acomm_lockstep.py"))
+        elif p.startswith("board:"):
+            lines.append("include(%r)" % os.path.join(ROOT, "ports", "micropython", "manifests", p[6:] + ".py"))
+        else:
+            raise ValueError(p)
+    return "\n".join(lines) + "\n"
+
+
+def _inputs():
+    # every file whose change must rebuild a product (coarse on purpose: a
+    # few seconds of build beat a stale firmware)
+    out = [os.path.abspath(__file__), PATCH]
+    for base in (os.path.join(ROOT, "acomm"), os.path.join(ROOT, "ports", "micropython"), os.path.join(ROOT, "tools", "lockstep")):
+        for dirpath, dirnames, filenames in os.walk(base):
+            dirnames[:] = sorted(d for d in dirnames if d != "__pycache__")
+            out.extend(os.path.join(dirpath, f) for f in sorted(filenames) if f.endswith((".py", ".patch")))
+    return out
+
+
+def key(ident):
+    h = hashlib.sha256(ident.encode())
+    for p in _inputs():
+        h.update(os.path.relpath(p, ROOT).encode())
+        _sha(p, h)
+    return h.hexdigest()
+
+
+def _fresh(name, k):
+    path = os.path.join(OUT, name + ".key")
+    try:
+        with open(path) as f:
+            return f.read().strip() == k and os.path.exists(os.path.join(OUT, name + ("" if name.startswith("micro") else ".elf")))
+    except OSError:
+        return False
+
+
+def _run(cmd, log):
+    with open(log, "w") as f:
+        r = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT)
+    if r.returncode != 0:
+        with open(log) as f:
+            tail = f.read().splitlines()[-25:]
+        raise RuntimeError("%s failed (log %s):\n%s" % (" ".join(cmd[:4]), log, "\n".join(tail)))
+
+
+# --- the builds ---------------------------------------------------------------
+
+
+def _make_common(tree, name, parts):
+    work = os.path.join(OUT, "work", name)
+    os.makedirs(work, exist_ok=True)
+    man = os.path.join(work, "manifest.py")
+    with open(man, "w") as f:
+        f.write(_manifest(parts))
+    # py/manifest.mk wants $(MPY_LIB_DIR)/README.md (micropython-lib) even
+    # when nothing require()s from it; the port-dir manifest stands in for
+    # $(PORT_DIR)/boards/manifest.py, which only some ports have
+    return work, ["FROZEN_MANIFEST=" + man, "MPY_LIB_DIR=" + FW, "MICROPY_MANIFEST_PORT_DIR=" + os.path.join(FW, "port"),
+                  "BUILD=" + os.path.join(work, "build")]
+
+
+def build_mpy_cross(tree):
+    _run(["make", "-C", os.path.join(tree, "mpy-cross"), "-j" + JOBS], os.path.join(OUT, "mpy-cross.log"))
+    shutil.copyfile(os.path.join(tree, "mpy-cross", "build", "mpy-cross"), os.path.join(OUT, "mpy-cross"))
+    os.chmod(os.path.join(OUT, "mpy-cross"), 0o755)
+
+
+def build_qemu(tree, name, parts):
+    work, args = _make_common(tree, name, parts)
+    cmd = ["make", "-C", os.path.join(tree, "ports", "qemu"), "-j" + JOBS, "BOARD=MPS2_AN385",
+           "MICROPY_VFS_LFS2=1", "MICROPY_HEAP_SIZE=%d" % QEMU_HEAP, "MICROPY_STACK_SIZE=16384",
+           # asyncio as on a board; 1-byte qstr hashes as rp2 has them
+           "CFLAGS_EXTRA=-DMICROPY_PY_ASYNCIO=1 -DMICROPY_QSTR_BYTES_IN_HASH=1"] + args
+    _run(cmd, os.path.join(work, "make.log"))
+    shutil.copyfile(os.path.join(work, "build", "firmware.elf"), os.path.join(OUT, name + ".elf"))
+
+
+def build_unix32(tree, name, parts):
+    work, args = _make_common(tree, name, parts)
+    cmd = ["make", "-C", os.path.join(tree, "ports", "unix"), "-j" + JOBS, "VARIANT=standard",
+           "CFLAGS_EXTRA=-m32", "LDFLAGS_EXTRA=-m32", "MPY_CROSS_FLAGS=-march=x86",
+           # these need git submodules the source subset does not carry
+           "MICROPY_PY_BTREE=0", "MICROPY_PY_FFI=0", "MICROPY_PY_SSL=0", "MICROPY_USE_READLINE=0"] + args
+    _run(cmd, os.path.join(work, "make.log"))
+    shutil.copyfile(os.path.join(work, "build", "micropython"), os.path.join(OUT, name))
+    os.chmod(os.path.join(OUT, name), 0o755)
+
+
+def build(only=None, install=True):
+    """Builds every stale product (or only those named); Missing when it cannot run here."""
+    ensure_tools(install)
+    src, ident = source()
+    tree = shadow(src, ident)
+    os.makedirs(OUT, exist_ok=True)
+    k = key(ident)
+    with open(os.path.join(OUT, "SOURCE"), "w") as f:
+        f.write(ident + "\n")
+    if not _fresh("mpy-cross", k):
+        say("building mpy-cross")
+        build_mpy_cross(tree)
+        with open(os.path.join(OUT, "mpy-cross.key"), "w") as f:
+            f.write(k)
+    for name, (port, parts) in PRODUCTS.items():
+        if only and name not in only:
+            continue
+        if _fresh(name, k):
+            continue
+        say("building %s" % name)
+        (build_qemu if port == "qemu" else build_unix32)(tree, name, parts)
+        with open(os.path.join(OUT, name + ".key"), "w") as f:
+            f.write(k)
+    return OUT
+
+
+def product(name):
+    """Path of a built product, or None when it is not built for the current sources."""
+    path = os.path.join(OUT, name + ("" if name.startswith(("micro", "mpy")) else ".elf"))
+    return path if os.path.exists(path) else None
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description="build MicroPython firmware with acomm frozen in (build/firmware/)")
+    p.add_argument("what", choices=("build", "check"))
+    p.add_argument("--only", action="append", choices=sorted(PRODUCTS), help="build only this product (repeatable)")
+    p.add_argument("--no-install", action="store_true", help="never run apt-get; say what is missing instead")
+    a = p.parse_args(argv)
+    try:
+        if a.what == "check":
+            miss = _missing_tools()
+            can_install = hasattr(os, "geteuid") and os.geteuid() == 0 and shutil.which("apt-get")
+            if miss and (a.no_install or not can_install):
+                raise Missing("missing %s: run 'apt-get install %s' as root" % (", ".join(miss), " ".join(miss)))
+            if not os.environ.get("MPY_DIR") and not _vendor_tarball() and not os.path.exists(os.path.join(BUILD, "mpy-src", "git")):
+                raise Missing("no MicroPython source: set MPY_DIR to a checkout of %s" % GIT_URL)
+            return 0
+        build(a.only, install=not a.no_install)
+    except Missing as e:
+        say(str(e))
+        return 3
+    except RuntimeError as e:
+        say(str(e))
+        return 1
+    say("built in %s" % os.path.relpath(OUT, os.getcwd()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
