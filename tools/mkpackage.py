@@ -170,7 +170,11 @@ def outputs(root):
     mp = os.path.join(root, "ports", "micropython")
     out = [(os.path.join(mp, "package.json"), package_json(root)), (os.path.join(mp, "manifest.py"), manifest_py(root))]
     for b in boards(root):
-        out.append((os.path.join(mp, "manifests", b + ".py"), board_manifest_py(root, b)))
+        try:
+            text = board_manifest_py(root, b)
+        except Exception as e:  # noqa: BLE001 - boardfiles.FlashError: the closure is broken
+            text = ValueError(str(e))
+        out.append((os.path.join(mp, "manifests", b + ".py"), text))
     return out
 
 
@@ -196,6 +200,10 @@ def main(argv=None):
     bad = 0
     for path, text in outputs(root):
         rel = os.path.relpath(path, root)
+        if isinstance(text, Exception):
+            bad += 1
+            print("%s: cannot be generated: %s" % (rel, text))
+            continue
         try:
             with open(path) as f:
                 old = f.read()

@@ -131,6 +131,9 @@ def _copy_tree(dst):
 
     shutil.copytree(os.path.join(ROOT, "acomm"), os.path.join(dst, "acomm"), ignore=ignore)
     shutil.copytree(MP, os.path.join(dst, "ports", "micropython"), ignore=ignore)
+    # the board manifests come from each board's import closure (boardfiles)
+    shutil.copytree(os.path.join(ROOT, "boards"), os.path.join(dst, "boards"), ignore=ignore)
+    shutil.copytree(os.path.join(ROOT, "ports", "cpython"), os.path.join(dst, "ports", "cpython"), ignore=ignore)
     os.makedirs(os.path.join(dst, "tools"))
     shutil.copy(TOOL, os.path.join(dst, "tools", "mkpackage.py"))
 
