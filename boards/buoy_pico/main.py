@@ -1,6 +1,5 @@
 # Runs at boot on the buoy's Pico: the node, for ever (acomm_mp.start).
-from config import CONFIG
-
+# The config goes by module name, so start() can free it once checked.
 from acomm_mp.start import start
 
-start(CONFIG)
+start("config")

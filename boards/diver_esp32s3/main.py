@@ -1,9 +1,8 @@
 # Runs at boot on the diver's tablet: the node and its station, for ever.
 # The status report carries what the tablet measures; with no sensor wired
 # it is an empty DIVER_STATUS (one byte), which still says "alive".
-from config import CONFIG
-
+# The config goes by module name, so start() can free it once checked.
 from acomm.station import diver_report
 from acomm_mp.start import start
 
-start(CONFIG, make_report=diver_report(lambda: {}))
+start("config", make_report=diver_report(lambda: {}))

@@ -234,6 +234,62 @@ def test_a_module_released_after_boot_leaves_and_loads_again():
     assert UartStream is not None and "acomm_mp.uartstream" in sys.modules
 
 
+def test_the_config_module_is_released_once_checked():
+    # start("config") on a board: the checked copy stays, the module and
+    # its raw CONFIG go (two copies would both stay on the heap for ever)
+    import sys
+
+    from acomm_mp.runloop import run_blocking
+    from acomm_mp.start import load_config
+
+    class _Module:
+        CONFIG = _config("buoy_pico")
+
+    sys.modules["acomm_test_config"] = _Module
+    try:
+        cfg = load_config("acomm_test_config")
+    finally:
+        gone = "acomm_test_config" not in sys.modules
+        sys.modules.pop("acomm_test_config", None)
+    assert gone and cfg["links"][0]["rxbuf"] == 1152 and "acomm_mp.boardconfig" not in sys.modules
+    assert load_config(_config("diver_esp32s3"))["name"] == "diver"  # a dict is taken as it is
+    assert run_blocking is not None
+
+
+def test_the_plain_loop_ticks_each_step_and_sleeps_what_is_left():
+    from acomm_mp.runloop import run_blocking
+
+    class _Board:
+        cfg = {"step_ms": 10}
+        ticks = []
+
+        def tick(self, now):
+            self.ticks.append(now)
+            t[0] += 3  # the step itself takes 3 ms
+
+    t = [0]
+    slept = []
+
+    def sleep(ms):
+        slept.append(ms)
+        t[0] += ms
+
+    b = _Board()
+    run_blocking(b, clock=lambda: t[0], sleep_ms=sleep, stop=lambda: len(b.ticks) >= 4)
+    assert b.ticks == [0, 10, 20, 30] and slept == [7, 7, 7, 7]
+    # a step longer than step_ms is not followed by a sleep
+    b.ticks = []
+    slept = []
+
+    def slow(now):
+        b.ticks.append(now)
+        t[0] += 25
+
+    b.tick = slow
+    run_blocking(b, clock=lambda: t[0], sleep_ms=sleep, stop=lambda: len(b.ticks) >= 2)
+    assert slept == [] and b.ticks[1] - b.ticks[0] == 25
+
+
 def test_a_network_key_in_the_config_secures_every_link_and_a_bad_one_is_refused():
     key = "00112233445566778899aabbccddeeff"
     c = _copy(_config("buoy_pico"))

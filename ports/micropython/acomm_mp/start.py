@@ -1,10 +1,15 @@
-# A board's entry point: boards/<name>/main.py calls start(CONFIG).
+# A board's entry point: boards/<name>/main.py calls start("config").
 #
 # Checks the configuration first (a wrong field stops here, named), then
 # opens the board's UARTs with machine.UART, the packet store on the flash
 # filesystem, and the watchdog when configured, builds the node
-# (acomm_mp.assemble) and runs it on asyncio for ever. Everything that
-# touches `machine` is here, so the rest of the port runs in tests.
+# (acomm_mp.assemble) and runs it for ever in a plain loop
+# (acomm_mp.runloop.run_blocking). Everything that touches `machine` is
+# here, so the rest of the port runs in tests.
+#
+# Given the config module's name rather than its CONFIG, start() lets the
+# module go once the checked copy is made: the two copies would otherwise
+# both stay on the heap for ever (1.3 KiB for the buoy).
 
 import os
 import time
@@ -51,21 +56,30 @@ def open_store(st):
     return Store(st["path"], capacity_bytes=st["capacity"], max_record=st["max_record"])
 
 
-def start(config, make_report=None, machine=None):
+def load_config(config):
+    """The checked config from a dict, or from the module of that name (then released)."""
     from .boardconfig import check
 
+    if isinstance(config, str):
+        name = config
+        config = __import__(name).CONFIG
+        release(name)
     cfg = check(config)
-    check = None
+    check = config = None
     release("acomm_mp.boardconfig")  # needed once: 1.4 KiB back to the heap
+    return cfg
+
+
+def start(config, make_report=None, machine=None):
+    """Runs the board for ever. config: the name of the config module (normally "config") or its CONFIG dict."""
+    cfg = load_config(config)
     if machine is None:
         import machine
     board = build(cfg, lambda lk: open_uart(machine, lk), ticks_ms, lambda: int(time.time()), open_store,
                   make_report=make_report)
     if cfg["watchdog_ms"] and hasattr(machine, "WDT"):
         board.wdt = machine.WDT(timeout=cfg["watchdog_ms"])
-    import asyncio
-
-    from .runloop import run
+    from .runloop import run_blocking
 
     print("acomm %s: node %d, links %s" % (cfg["name"], cfg["node_id"], ", ".join(board.node.links)))
-    asyncio.run(run(board))
+    run_blocking(board)
