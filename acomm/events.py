@@ -15,16 +15,10 @@ EXPIRED = const(6)
 CANCELED = const(7)
 FAILED = const(8)
 
-STATUS_NAMES = {
-    QUEUED: "queued",
-    TRANSMITTING: "transmitting",
-    WAITING: "waiting",
-    TRANSMITTED: "transmitted",
-    DELIVERED: "delivered",
-    EXPIRED: "expired",
-    CANCELED: "canceled",
-    FAILED: "failed",
-}
+# Names indexed by the status. Name tables are tuples of constants, never
+# dicts: frozen into firmware a constant tuple stays in flash, while a dict
+# is built on the heap at import (a board's 64 KiB).
+STATUS_NAMES = ("?", "queued", "transmitting", "waiting", "transmitted", "delivered", "expired", "canceled", "failed")
 
 
 def is_final(status):
@@ -36,7 +30,7 @@ UNKNOWN = const(0)
 AVAILABLE = const(1)
 UNAVAILABLE = const(2)
 
-AVAIL_NAMES = {UNKNOWN: "unknown", AVAILABLE: "available", UNAVAILABLE: "unavailable"}
+AVAIL_NAMES = ("unknown", "available", "unavailable")  # indexed by the availability
 
 # Driver -> link events.
 #   (EV_RX, src_addr, dst_addr, data)      src/dst None on links without addressing

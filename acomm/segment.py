@@ -56,8 +56,13 @@ F_COMPRESSED = const(0x40)
 REFUSE_TOO_BIG = const(1)
 REFUSE_FULL = const(2)
 REFUSE_NO_ROUTE = const(3)
-REFUSE_NAMES = {REFUSE_TOO_BIG: "too big for the receiver", REFUSE_FULL: "receiver full",
-                REFUSE_NO_ROUTE: "no route at the relay"}
+# indexed by the reason (a tuple stays in flash when frozen; a dict would not)
+REFUSE_NAMES = ("?", "too big for the receiver", "receiver full", "no route at the relay")
+
+
+def refuse_name(reason):
+    """What a refusal reason means, or the number itself when it is not one we know."""
+    return REFUSE_NAMES[reason] if 0 < reason < len(REFUSE_NAMES) else reason
 
 
 def _head(k, pc, lane, gen):

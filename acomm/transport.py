@@ -410,7 +410,7 @@ class Transport(Receiving):
                 self._abandon(now, p)
                 p.wait = ticks_add(now, _FULL_WAIT_MS)
             else:
-                self._final(now, p, FAILED, "refused: %s" % sg.REFUSE_NAMES.get(o.refused, o.refused))
+                self._final(now, p, FAILED, "refused: %s" % sg.refuse_name(o.refused))
         elif o.complete:
             self._final(now, p, TRANSMITTED if p.final != src else DELIVERED, "")
         else:

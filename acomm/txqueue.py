@@ -204,7 +204,9 @@ class TxQueue:
             raise ValueError("aging_ms must be 0..2**23")
         self.capacity = capacity
         self._aging = aging_ms
-        self._heaps = [[] for _ in range(_NCLASS)]  # one heap per class
+        # one heap per class, made when the class is first used: 16 empty
+        # lists would cost a board 512 bytes per link for classes it never uses
+        self._heaps = [None] * _NCLASS
         # Per class: time (relative to _ref) since which it has waited unserved.
         self._since = [0] * _NCLASS
         self._n = 0  # requests in the heaps
@@ -314,6 +316,8 @@ class TxQueue:
             if out is None:
                 return req
         h = self._heaps[p - 1]
+        if h is None:
+            h = self._heaps[p - 1] = []
         if not h:
             self._since[p - 1] = rel
         _heap_push(h, req, self._ref)
@@ -387,7 +391,7 @@ class TxQueue:
         # Remove and return the queued request with this req_id (the first
         # found if the caller reused one), or None.
         for h in self._heaps:
-            for i in range(len(h)):
+            for i in range(len(h) if h else 0):
                 if h[i].req_id == req_id:
                     self._n -= 1
                     return _heap_remove(h, i, self._ref)
@@ -407,7 +411,7 @@ class TxQueue:
         # Every request the queue holds, in no particular order (for status
         # queries). Do not push/pop/cancel while iterating.
         for h in self._heaps:
-            for r in h:
+            for r in h or _NONE:
                 yield r
         for r in self._held:
             yield r

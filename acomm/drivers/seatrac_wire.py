@@ -56,32 +56,36 @@ CST_XCVR_STATE_REQ = const(0x3D)
 CST_XCVR_STATE_RX = const(0x3E)
 CST_XCVR_STATE_RESP = const(0x3F)
 
-_CST_NAMES = {
-    0x00: "OK",
-    0x01: "FAIL",
-    0x03: "EEPROM_ERROR",
-    0x04: "CMD_PARAM_MISSING",
-    0x05: "CMD_PARAM_INVALID",
-    0x30: "XCVR_BUSY",
-    0x31: "XCVR_ID_REJECTED",
-    0x32: "XCVR_CSUM_ERROR",
-    0x33: "XCVR_LENGTH_ERROR",
-    0x34: "XCVR_RESP_TIMEOUT",
-    0x35: "XCVR_RESP_ERROR",
-    0x36: "XCVR_RESP_WRONG",
-    0x37: "XCVR_PLOAD_ERROR",
-    0x3A: "XCVR_STATE_STOPPED",
-    0x3B: "XCVR_STATE_IDLE",
-    0x3C: "XCVR_STATE_TX",
-    0x3D: "XCVR_STATE_REQ",
-    0x3E: "XCVR_STATE_RX",
-    0x3F: "XCVR_STATE_RESP",
-}
+# (code, name) pairs: a constant tuple stays in flash when frozen, a dict
+# would be built on the heap
+_CST_NAMES = (
+    (0x00, "OK"),
+    (0x01, "FAIL"),
+    (0x03, "EEPROM_ERROR"),
+    (0x04, "CMD_PARAM_MISSING"),
+    (0x05, "CMD_PARAM_INVALID"),
+    (0x30, "XCVR_BUSY"),
+    (0x31, "XCVR_ID_REJECTED"),
+    (0x32, "XCVR_CSUM_ERROR"),
+    (0x33, "XCVR_LENGTH_ERROR"),
+    (0x34, "XCVR_RESP_TIMEOUT"),
+    (0x35, "XCVR_RESP_ERROR"),
+    (0x36, "XCVR_RESP_WRONG"),
+    (0x37, "XCVR_PLOAD_ERROR"),
+    (0x3A, "XCVR_STATE_STOPPED"),
+    (0x3B, "XCVR_STATE_IDLE"),
+    (0x3C, "XCVR_STATE_TX"),
+    (0x3D, "XCVR_STATE_REQ"),
+    (0x3E, "XCVR_STATE_RX"),
+    (0x3F, "XCVR_STATE_RESP"),
+)
 
 
 def status_name(code):
-    n = _CST_NAMES.get(code)
-    return n if n is not None else "CST_0x%02X" % code
+    for c, n in _CST_NAMES:
+        if c == code:
+            return n
+    return "CST_0x%02X" % code
 
 
 # AMSGTYPE_E: acoustic message types.

@@ -63,7 +63,7 @@ def _print_event(ev):
     if code == EV_RECEIVED:
         line = "received %s %s -> %s: %s" % (ev[1].name, ev[2], ev[3], bytes(ev[4]).decode("utf-8", "replace"))
     elif code == EV_AVAILABILITY:
-        line = "%s %s on %s" % (AVAIL_NAMES.get(ev[3], ev[3]), ev[2], ev[1].name)
+        line = "%s %s on %s" % ((AVAIL_NAMES[ev[3]] if 0 <= ev[3] < len(AVAIL_NAMES) else ev[3]), ev[2], ev[1].name)
     elif code == EV_REFUSED:
         line = "refused from %s: %s" % (ev[2], ev[3])
     elif code == EV_STATUS and is_final(ev[3]):

@@ -28,6 +28,18 @@ class QemuError(Exception):
     pass
 
 
+def _die_with_parent():
+    # qemu is killed when the process that started it dies, even by SIGKILL
+    # (a test runner's timeout): an orphaned board would hold a core for ever
+    try:
+        import ctypes
+        import signal
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
 def repo_root():
     import acomm
 
@@ -62,7 +74,7 @@ class QemuBoard:
         self.args = qemu_args(elf, heap, rom)
         self._t = None
         self.proc = subprocess.Popen(self.args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE)
+                                     stderr=subprocess.PIPE, preexec_fn=_die_with_parent)
         self.port = self._pty()
 
     def _pty(self):
