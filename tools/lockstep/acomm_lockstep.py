@@ -42,7 +42,8 @@ class _Uart:
     # receive ring acomm_mp.start asks for (the link's rxbuf) and the
     # RP2040 port's default 256-byte transmit buffer, both on the heap
     # as on the board and allocated once, so the harness allocates nothing
-    # per step. Bytes beyond a full ring are lost, as in an overrun; a full
+    # per step but the bytes each read returns (machine.UART.read allocates
+    # them too). Bytes beyond a full ring are lost, as in an overrun; a full
     # transmit buffer takes part of a write (the node keeps the rest).
     def __init__(self, rxbuf=1024, txbuf=256):
         self.rx = bytearray(rxbuf)
@@ -57,16 +58,21 @@ class _Uart:
     def any(self):
         return self.count
 
-    def readinto(self, buf):
+    def read(self, n):
+        # timeout=0, as acomm_mp.start opens it: what is waiting, up to n,
+        # in one new bytes object, as machine.UART.read allocates it
+        n = min(n, self.count)
+        if not n:
+            return None
         size = len(self.rx)
-        n = min(len(buf), self.count)
-        first = min(n, size - self.head)
-        buf[:first] = self.rmv[self.head : self.head + first]
-        if n > first:
-            buf[first:n] = self.rmv[: n - first]
-        self.head = (self.head + n) % size
+        h = self.head
+        if h + n <= size:
+            out = bytes(self.rmv[h : h + n])
+        else:
+            out = bytes(self.rmv[h:size]) + bytes(self.rmv[: n - (size - h)])
+        self.head = (h + n) % size
         self.count -= n
-        return n
+        return out
 
     def write(self, data):
         n = min(len(data), len(self.tx) - self.tn)
