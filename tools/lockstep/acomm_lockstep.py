@@ -97,6 +97,8 @@ class _Uart:
 
 
 _SCRATCH = bytearray(64)
+# a bare-metal port's stdout has no flush(): what it writes goes straight out
+_FLUSH = hasattr(sys.stdout.buffer, "flush")
 _HDR = bytearray(5)
 
 
@@ -124,17 +126,16 @@ def main(path, store_path, rom=None):
     global _ROM
     if rom:
         _ROM = _mount_rom(rom)
-    from acomm_mp import release
     from acomm_mp.assemble import build
 
-    g = {}
-    with open(path) as f:
-        exec(f.read(), g)
-    from acomm_mp.boardconfig import check
+    # the config as start("config") loads it: by module name, released once
+    # checked, so only the checked copy stays on the heap
+    folder, slash, fname = path.rpartition("/")
+    sys.path.insert(0, folder or slash or ".")
+    from acomm_mp.start import load_config
 
-    cfg = check(g["CONFIG"])
-    check = None
-    release("acomm_mp.boardconfig")  # as start() does
+    cfg = load_config(fname[:-3] if fname.endswith(".py") else fname)
+    sys.path.pop(0)
     # every module the board runs, loaded before the node exists: what is
     # allocated then is mostly bytecode, which a ROMFS partition or firmware
     # with the modules frozen in (ports/micropython/manifest.py) keeps in
@@ -186,7 +187,8 @@ def main(path, store_path, rom=None):
             out.write(hdr[:2])
             out.write(u.tmv[: u.tn])
             u.tn = 0
-        out.flush()
+        if _FLUSH:
+            out.flush()
     st = board.stats
     tx = rx = 0
     for name in board.node.links:
