@@ -10,20 +10,21 @@
 # for a simulated minute against emulated modems on the board, as
 # test_board_on_fakeboard.py does: frames on both links, the diver's packet
 # relayed, no error, no MemoryError. Every module the board needs is
-# imported first and its __file__ checked (/lib/....mpy, or .frozen/...);
-# the simulator is test scaffolding under /sim, reached by pointing the
-# board's packages' __path__ there only after that, so it never stands in
-# for a board module.
+# imported first and where it came from checked (/lib/....mpy; or frozen:
+# its package's __path__ is .frozen/...). The simulator is test
+# scaffolding under /sim, reached by pointing the board's packages'
+# __path__ there only after that, so it never stands in for a board module.
 import ast
 import os
 import shutil
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
 from acomm_cpython import boardfiles
-from acomm_cpython.qemuboard import QemuBoard, firmware
+from acomm_cpython.qemuboard import QemuBoard, QemuError, firmware
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ACOMM = os.path.join(os.path.dirname(sys.executable), "acomm")
@@ -36,9 +37,9 @@ sys.path.append('/')
 _need = %r
 for _m in _need:
     __import__(_m)
-print('FROM', repr({_m: sys.modules[_m].__file__ for _m in _need}))
+print('FROM', repr({_m: (sys.modules[_m].__file__, getattr(sys.modules[_m], '__path__', None)) for _m in _need}))
 for _m in _need:
-    if sys.modules[_m].__file__.endswith(('__init__.py', '__init__.mpy')):
+    if hasattr(sys.modules[_m], '__path__'):
         sys.modules[_m].__path__ = '/sim/' + _m.replace('.', '/')
 sys.path.append('/sim')
 from config import CONFIG
@@ -87,7 +88,9 @@ def _scaffold(tmp_path, needed):
                         srcs.append((os.path.join(d, f), stage / pkg / (rel[:-3] + ".mpy")))
     for src, dst in srcs:
         dst.parent.mkdir(parents=True, exist_ok=True)
-        boardfiles.compile_mpy(src, str(dst), "armv6m", mpy_cross=mc)
+    with ThreadPoolExecutor(max_workers=4) as ex:
+        for f in [ex.submit(boardfiles.compile_mpy, src, str(dst), "armv6m", None, mc) for src, dst in srcs]:
+            f.result()
     return stage
 
 
@@ -109,6 +112,8 @@ def _run_minute(tmp_path, port, needed):
 
 def test_the_buoy_flashed_to_the_cortex_m3_runs_from_the_flashed_mpy(tmp_path):
     with QemuBoard(_need("cm3-plain"), heap=HEAP) as b:
+        r = _flash(b.port, "--frozen")  # asserts a frozen acomm, which this firmware has not
+        assert r.returncode == 2 and "has no acomm frozen in its firmware" in r.stderr, r.stdout + r.stderr
         r = _flash(b.port)
         assert r.returncode == 0, r.stdout + r.stderr
         assert "frozen" not in r.stdout and "flashed" in r.stdout, r.stdout
@@ -116,9 +121,10 @@ def test_the_buoy_flashed_to_the_cortex_m3_runs_from_the_flashed_mpy(tmp_path):
         files = _run_minute(tmp_path, b.port, needed)
         assert b.alive(), b.stop()
     assert set(files) == set(needed)
-    for m, f in files.items():
+    for m, (f, path) in files.items():
         assert f.startswith("/lib/") and f.endswith(".mpy"), (m, f)  # the flashed, compiled module ran
-    assert files["acomm._crc16_viper"] == "/lib/acomm/_crc16_viper.mpy"  # armv6m viper loads on the M3
+    assert files["acomm._crc16_viper"][0] == "/lib/acomm/_crc16_viper.mpy"  # armv6m viper loads on the M3
+    assert files["acomm.drivers"][1] == "/lib/acomm/drivers"
 
 
 def test_the_production_buoy_gets_only_its_config_and_runs_frozen_acomm(tmp_path):
@@ -126,7 +132,7 @@ def test_the_production_buoy_gets_only_its_config_and_runs_frozen_acomm(tmp_path
         # a stale copy of acomm from an earlier, unfrozen flash
         _mp(b.port, "exec", "import os\nfor d in ('/lib', '/lib/acomm', '/lib/acomm_mp'):\n    os.mkdir(d)\n"
                             "open('/lib/acomm/link.py', 'w').write('BROKEN = 1\\n')")
-        r = _flash(b.port, "--frozen")
+        r = _flash(b.port)  # found out on the board, no --frozen
         assert r.returncode == 0, r.stdout + r.stderr
         assert "frozen in its firmware" in r.stdout and "copying only main.py and config.py" in r.stdout, r.stdout
         assert "flashed 2 files" in r.stdout, r.stdout
@@ -136,8 +142,12 @@ def test_the_production_buoy_gets_only_its_config_and_runs_frozen_acomm(tmp_path
         files = _run_minute(tmp_path, b.port, needed)
         assert b.alive(), b.stop()
     assert set(files) == set(needed)
-    for m, f in files.items():
-        assert f.startswith(".frozen/"), (m, f)  # from the firmware, not from /lib
+    # from the firmware, not from /lib: a frozen module's __file__ is its
+    # name alone (acomm/link.py, no .mpy), its package's __path__ .frozen/...
+    for m, (f, path) in files.items():
+        assert not f.startswith("/") and f.endswith(".py"), (m, f)
+        assert path is None or path.startswith(".frozen/"), (m, path)
+    assert files["acomm"][1] == ".frozen/acomm"
 
 
 def test_flash_refuses_a_version_other_than_the_frozen_one(tmp_path):
@@ -161,3 +171,11 @@ def test_flash_reports_a_board_that_does_not_answer(tmp_path):
     b.stop()
     r = _flash(port)
     assert r.returncode == 1 and ("no answer from %s" % port) in r.stderr, r.stdout + r.stderr
+
+
+def test_a_qemu_that_does_not_start_is_reported_with_its_stderr(tmp_path):
+    fw = _need("cm3-plain")
+    with pytest.raises(QemuError) as e:
+        QemuBoard(fw, heap=HEAP, rom=str(tmp_path / "no-such-romfs.img"))
+    msg = str(e.value)
+    assert "qemu did not start" in msg and "no-such-romfs.img" in msg and "qemu-system-arm:" in msg, msg

@@ -14,7 +14,8 @@
 #
 # A board whose firmware has acomm frozen in (its modules are found under
 # .frozen, which comes before /lib on sys.path) gets only main.py and
-# config.py: the board is asked for acomm.__file__ and __version__ and
+# config.py: the board is asked for acomm.__path__ (.frozen/acomm; a frozen
+# module's __file__ is only its name, acomm/link.py) and __version__ and
 # imports every module the board needs from its firmware. A version other
 # than the host's, or a module the firmware lacks, stops the flash (exit
 # 2; --force flashes past a version mismatch). Copies of acomm left in
@@ -81,7 +82,7 @@ _v = os.statvfs('/')
 print('ACOMM-DF', _v[0], _v[0] * _v[3], sum(_b(p, _v[0]) for p in %r))
 try:
     import acomm
-    _f, _r = str(getattr(acomm, '__file__', '?')), str(getattr(acomm, '__version__', '?'))
+    _f, _r = str(getattr(acomm, '__path__', '?')), str(getattr(acomm, '__version__', '?'))
 except Exception:
     _f = _r = '-'
 _miss = []
@@ -139,7 +140,7 @@ OWNED = ("/lib/acomm", "/lib/acomm_mp")
 
 class Device:
     """What the board said: block size, free bytes, bytes in the files a flash
-    replaces, acomm's __file__ and __version__ there ('-' when none), and the
+    replaces, acomm's __path__ and __version__ there ('-' when none), and the
     needed modules its frozen acomm lacks."""
 
     def __init__(self, bs, free, replaced, acomm_file, version, missing):
