@@ -248,6 +248,7 @@ def run(args, log=print):
     if args.frozen:
         entries = [e for e in entries if not e.device.startswith("/lib/")]
         kind = "main.py and config.py only, acomm frozen in the firmware"
+        total = sum(e.size for e in entries)
     if args.dry_run:
         w = max(len(e.device) for e in entries)
         for e in entries:
