@@ -203,7 +203,7 @@ class _FakeMpremote:
     def __call__(self, device, args, what, timeout=flash.TIMEOUT_S):
         self.calls.append(args)
         if args[0] == "exec" and "statvfs" in args[1]:
-            return "ACOMM-DF %d %d %d\n" % (self.bs, self.free, self.replaced)
+            return "ACOMM-DF %d %d %d\nACOMM-FROZEN - - -\n" % (self.bs, self.free, self.replaced)
         if args[0] == "exec":
             return "ACOMM-READY\n"
         return ""

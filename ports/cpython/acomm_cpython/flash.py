@@ -10,16 +10,26 @@
 # removed: MicroPython imports x.py before x.mpy, so an old source copy
 # (from `mip install`, --no-compile) would shadow the new compiled module.
 # The copy is a few mpremote calls of `fs cp` chained with `+`, each with a
-# time limit.
+# time limit that grows with the bytes it carries.
+#
+# A board whose firmware has acomm frozen in (its modules are found under
+# .frozen, which comes before /lib on sys.path) gets only main.py and
+# config.py: the board is asked for acomm.__path__ (.frozen/acomm; a frozen
+# module's __file__ is only its name, acomm/link.py) and __version__ and
+# imports every module the board needs from its firmware. A version other
+# than the host's, or a module the firmware lacks, stops the flash (exit
+# 2; --force flashes past a version mismatch). Copies of acomm left in
+# /lib by an earlier flash are removed: they would never run, and would
+# confuse whoever reads the board's files.
 
 import os
 import shutil
 import subprocess
 import sys
 
-from .boardfiles import MPY_ARCHES, FlashError, board_path, device_dirs, load_config, plan
+from .boardfiles import MPY_ARCHES, FlashError, board_path, device_dirs, load_config, modules, plan
 
-TIMEOUT_S = 30  # one mpremote call
+TIMEOUT_S = 30  # one mpremote call, plus 1 s per KiB it copies
 _BATCH_FILES = 32  # `fs cp` per mpremote call
 _BATCH_BYTES = 48 * 1024
 
@@ -56,7 +66,9 @@ def _mpremote(device, args, what, timeout=TIMEOUT_S):
 
 
 # Runs on the board: free space, block size, and the blocks held by the files
-# a flash replaces (those trees and files are rewritten).
+# a flash replaces (those trees and files are rewritten); then where acomm
+# comes from and, when it is frozen, which of the needed modules the
+# firmware lacks (a frozen package's submodules come only from .frozen).
 _DF = """import os
 def _b(p, bs):
     try:
@@ -68,6 +80,19 @@ def _b(p, bs):
     return (s[6] + bs - 1) // bs * bs
 _v = os.statvfs('/')
 print('ACOMM-DF', _v[0], _v[0] * _v[3], sum(_b(p, _v[0]) for p in %r))
+try:
+    import acomm
+    _f, _r = str(getattr(acomm, '__path__', '?')), str(getattr(acomm, '__version__', '?'))
+except Exception:
+    _f = _r = '-'
+_miss = []
+if _f.startswith('.frozen'):
+    for _m in %r:
+        try:
+            __import__(_m)
+        except Exception:
+            _miss.append(_m)
+print('ACOMM-FROZEN', _f.replace(' ', '_'), _r.replace(' ', '_'), ' '.join(_miss) or '-')
 """
 
 # Runs on the board: remove what an earlier flash left under the trees it
@@ -92,6 +117,11 @@ def _clean(p):
             os.remove(q)
 for _p in %r:
     _clean(_p)
+    if _p not in _keep:
+        try:
+            os.rmdir(_p)
+        except OSError:
+            pass
 for _d in %r:
     try:
         os.mkdir(_d)
@@ -101,27 +131,50 @@ print('ACOMM-READY')
 """
 
 
-def _owned_trees(entries):
-    # the trees under /lib that belong to acomm (cleaned on the device)
-    return sorted(set("/lib/" + e.device.split("/")[2] for e in entries if e.device.startswith("/lib/")))
-
-
 def _blocks(n, bs):
     return (n + bs - 1) // bs * bs
 
 
-def device_space(device, entries):
-    """(block size, free bytes, bytes in files the flash replaces) on the device."""
-    replaced = ["/main.py", "/config.py"] + _owned_trees(entries)
+OWNED = ("/lib/acomm", "/lib/acomm_mp")
+
+
+class Device:
+    """What the board said: block size, free bytes, bytes in the files a flash
+    replaces, acomm's __path__ and __version__ there ('-' when none), and the
+    needed modules its frozen acomm lacks."""
+
+    def __init__(self, bs, free, replaced, acomm_file, version, missing):
+        self.bs, self.free, self.replaced = bs, free, replaced
+        self.acomm_file, self.version, self.missing = acomm_file, version, missing
+
+    @property
+    def frozen(self):
+        return self.acomm_file.startswith(".frozen")
+
+
+def probe(device, needed=()):
+    """Asks the board for its free space and whether acomm is frozen in its firmware."""
+    replaced = ["/main.py", "/config.py"] + list(OWNED)
     try:
-        out = _mpremote(device, ["exec", _DF % (replaced,)], "no answer from %s" % device)
+        out = _mpremote(device, ["exec", _DF % (replaced, sorted(needed))], "no answer from %s" % device)
     except FlashError as e:
         raise FlashError(str(e), 1)
+    df = fz = None
     for ln in out.splitlines():
         p = ln.split()
         if len(p) == 4 and p[0] == "ACOMM-DF":
-            return int(p[1]), int(p[2]), int(p[3])
-    raise FlashError("no answer from %s: unexpected reply to statvfs: %r" % (device, out.strip()[-200:]))
+            df = int(p[1]), int(p[2]), int(p[3])
+        elif len(p) == 4 and p[0] == "ACOMM-FROZEN":
+            fz = p[1], p[2], [] if p[3] == "-" else p[3].split()
+    if df is None or fz is None:
+        raise FlashError("no answer from %s: unexpected reply to statvfs: %r" % (device, out.strip()[-200:]))
+    return Device(*(df + fz))
+
+
+def device_space(device, entries):
+    """(block size, free bytes, bytes in files the flash replaces) on the device."""
+    d = probe(device)
+    return d.bs, d.free, d.replaced
 
 
 def _batches(entries):
@@ -136,17 +189,17 @@ def _batches(entries):
         yield cur
 
 
-def flash(device, entries, log=print):
-    """Copy the planned files to the device; returns (files, bytes)."""
-    bs, free, replaced = device_space(device, entries)
-    bs = bs or 1
+def flash(device, entries, log=print, dev=None):
+    """Copy the planned files to the device; returns (files, bytes). dev: its probe() answer."""
+    dev = dev or probe(device)
+    bs, free, replaced = dev.bs or 1, dev.free, dev.replaced
     need = sum(_blocks(e.size, bs) for e in entries)
     if need > free + replaced:
         raise FlashError("not enough space on %s: %d bytes needed (%d files in %d-byte blocks), %d free "
                          "(%d now + %d in files it replaces)" % (device, need, len(entries), bs, free + replaced,
                                                                    free, replaced))
     keep = [e.device for e in entries] + device_dirs(entries)
-    out = _mpremote(device, ["exec", _PREPARE % (sorted(keep), _owned_trees(entries), device_dirs(entries))],
+    out = _mpremote(device, ["exec", _PREPARE % (sorted(keep), list(OWNED), device_dirs(entries))],
                     "preparing folders on %s" % device)
     if "ACOMM-READY" not in out:
         raise FlashError("preparing folders on %s: unexpected reply %r" % (device, out.strip()[-200:]))
@@ -157,7 +210,7 @@ def flash(device, entries, log=print):
             if args:
                 args.append("+")
             args += ["fs", "cp", e.host, ":" + e.device]
-        _mpremote(device, args, "copying to %s" % device)
+        _mpremote(device, args, "copying to %s" % device, TIMEOUT_S + sum(e.size for e in batch) // 1024)
         done += len(batch)
         log("  %d/%d files" % (done, len(entries)))
     return len(entries), sum(e.size for e in entries)
@@ -174,6 +227,11 @@ def add_arguments(p):
     p.add_argument("--no-compile", action="store_true", help="copy the modules as .py source instead of .mpy")
     p.add_argument("--arch", help="mpy-cross -march (default: the config's \"arch\")")
     p.add_argument("--boards", metavar="DIR", help="folder of boards (default: boards/ in the repository)")
+    p.add_argument("--frozen", action="store_true",
+                   help="the board's firmware has acomm frozen in: copy only main.py and config.py, and stop if "
+                        "the board has no frozen acomm (without it this is found out on the board)")
+    p.add_argument("--force", action="store_true",
+                   help="flash even when the board's frozen acomm has another version than this host's")
 
 
 def run(args, log=print):
@@ -187,14 +245,39 @@ def run(args, log=print):
     entries = plan(board_dir, arch, compile=not args.no_compile)
     total = sum(e.size for e in entries)
     kind = "source .py" if args.no_compile else ".mpy for " + arch
+    if args.frozen:
+        entries = [e for e in entries if not e.device.startswith("/lib/")]
+        kind = "main.py and config.py only, acomm frozen in the firmware"
+        total = sum(e.size for e in entries)
     if args.dry_run:
         w = max(len(e.device) for e in entries)
         for e in entries:
             log("%-*s %8d" % (w, e.device, e.size))
         log("%-*s %8d" % (w, "total (%d files, %s)" % (len(entries), kind), total))
         return 0
+    dev = probe(args.port, modules(board_dir, cfg))
+    if args.frozen and not dev.frozen:
+        raise FlashError("--frozen: %s has no acomm frozen in its firmware (acomm there: %s)"
+                         % (args.port, "none" if dev.acomm_file == "-" else dev.acomm_file), 2)
+    if dev.frozen:
+        import acomm
+
+        log("%s has acomm %s frozen in its firmware (%s): copying only main.py and config.py"
+            % (args.port, dev.version, dev.acomm_file))
+        if dev.missing:
+            raise FlashError("the firmware on %s lacks modules board %s needs: %s; build a firmware with its "
+                             "manifest (ports/micropython/manifests/), or one without acomm frozen"
+                             % (args.port, args.board, " ".join(dev.missing)), 2)
+        if dev.version != acomm.__version__:
+            msg = "the frozen acomm on %s is version %s, this host's is %s" % (args.port, dev.version,
+                                                                             acomm.__version__)
+            if not args.force:
+                raise FlashError(msg + "; rebuild the firmware, or --force to flash the board's files anyway", 2)
+            log("warning: " + msg + " (--force)")
+        entries = [e for e in entries if not e.device.startswith("/lib/")]
+        kind = "main.py and config.py"
     log("flashing board %s (%s) to %s" % (args.board, kind, args.port))
-    n, b = flash(args.port, entries, log)
+    n, b = flash(args.port, entries, log, dev)
     log("flashed %d files, %d bytes to %s; reset the board to start it" % (n, b, args.port))
     return 0
 

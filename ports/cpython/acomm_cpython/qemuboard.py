@@ -22,6 +22,7 @@ HEAP_WORD = 0x21FFFFF8
 HEAP_MAGIC = 0x48454150
 ROMFS_PART0 = 0x21000000
 START_TIMEOUT_S = 10
+START_GRACE_S = 0.3
 
 
 class QemuError(Exception):
@@ -95,7 +96,13 @@ class QemuBoard:
                 buf += chunk
                 m = re.search(rb"(/dev/pts/\d+)", buf)
                 if m:
-                    return m.group(1).decode()
+                    # qemu names the pty before it sets up the devices; a
+                    # bad -device (a missing ROMFS image) stops it just after
+                    try:
+                        self.proc.wait(START_GRACE_S)
+                    except subprocess.TimeoutExpired:
+                        return m.group(1).decode()
+                    break
         err = self.stop()
         raise QemuError("qemu did not start (%s): %s" % (" ".join(self.args), (buf.decode(errors="replace") + err).strip()))
 
