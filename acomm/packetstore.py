@@ -75,13 +75,18 @@ class MemoryStore:
     def get(self, key):
         return self._d.get(key)
 
+    def length(self, key):
+        d = self._d.get(key)
+        return None if d is None else len(d)
+
     def keys(self):
         return list(self._d)
 
 
 class Stored:
     # what recover() gives back for each packet
-    __slots__ = ("origin", "final", "pid", "prio", "expiry", "compressed", "medium", "body", "chunks")
+    # body is None: the transport reads it back (body()) when it sends the packet
+    __slots__ = ("origin", "final", "pid", "prio", "expiry", "compressed", "medium", "body", "chunks", "size", "key")
 
 
 class PacketStore:
@@ -94,7 +99,8 @@ class PacketStore:
         self.done = []  # (origin, pid) delivered lately, as recover() found them
 
     def _sizes(self, p):
-        n = _HDR + (1 + len(p.medium) if p.medium else 0) + len(p.body)
+        # p.size: the body's length (the body itself may be in the store only)
+        n = _HDR + (1 + len(p.medium) if p.medium else 0) + p.size
         return n, (n + self.chunk - 1) // self.chunk
 
     def room(self, p, urgent=None):
@@ -134,7 +140,7 @@ class PacketStore:
         # raises StoreFull (nothing of the packet stays then)
         n, chunks = self._sizes(p)
         if chunks > 255:
-            raise StoreFull("packet of %d bytes needs more than 255 records" % len(p.body))
+            raise StoreFull("packet of %d bytes needs more than 255 records" % p.size)
         if not self.room(p, True):
             raise StoreFull("store full")
         p.chunks = chunks
@@ -164,8 +170,14 @@ class PacketStore:
         for i in range(1, p.chunks):
             self.store.delete((i << 24) | p.key)
 
+    def body(self, key):
+        """The stored body of the packet with this key, read back from the store; None when it is gone or damaged."""
+        s = self._load(key, True)
+        return None if s is None else s.body
+
     def recover(self):
-        # -> [Stored]; drops what a cut left incomplete
+        # -> [Stored] without their bodies (a board's heap holds only what
+        # it is sending); drops what a cut left incomplete
         st = self.store
         keys = st.keys()
         heads = {}
@@ -187,18 +199,21 @@ class PacketStore:
                 if k != _META and (k & 0xFFFFFF) not in heads:
                     st.delete(k)  # a chunk whose packet is gone or never finished
                 continue
-            s = self._load(k)
+            s = self._load(k, False)
             if s is None:
                 self._drop(k)
             else:
                 out.append(s)
         return out
 
-    def _load(self, k):
+    def _load(self, k, with_body):
+        # with_body False: the header, and the body's size from the records'
+        # lengths (every chunk must be there), without reading the chunks
         rec = self.store.get(k)
         if rec is None or len(rec) < _HDR:
             return None
         s = Stored()
+        s.key = k
         s.origin, s.final, s.pid, s.prio = rec[0], rec[1], (rec[2] << 8) | rec[3], rec[4]
         s.compressed = bool(rec[5] & _F_COMPRESSED)
         s.expiry = int.from_bytes(rec[6:10], "big")
@@ -213,13 +228,23 @@ class PacketStore:
             except ValueError:  # UnicodeError on CPython
                 return None
             at += 1 + rec[at]
-        parts = [rec[at:]]
+        s.size = len(rec) - at
+        s.body = None
+        parts = [rec[at:]] if with_body else None
         for i in range(1, chunks):
-            c = self.store.get((i << 24) | k)
-            if c is None:
+            ck = (i << 24) | k
+            if with_body:
+                c = self.store.get(ck)
+                n = None if c is None else len(c)
+            else:
+                n = self.store.length(ck)
+            if n is None:
                 return None
-            parts.append(c)
-        s.body = b"".join(parts)
+            s.size += n
+            if with_body:
+                parts.append(c)
+        if with_body:
+            s.body = b"".join(parts)
         return s
 
     def _drop(self, k):

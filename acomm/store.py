@@ -212,6 +212,11 @@ class Store:
     def __contains__(self, key):
         return self._find(key) >= 0
 
+    def length(self, key):
+        """The data length of the record with this key, or None; reads nothing from the file."""
+        j = self._find(key)
+        return None if j < 0 else struct.unpack_from("<IH", self._locs, 6 * j)[1]
+
     def compact(self):
         f = self._file()
         g = open(self._tmp, "wb")

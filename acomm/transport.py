@@ -48,7 +48,7 @@ __all__ = ("Transport", "MemoryStore")
 
 class _Packet:
     __slots__ = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link",
-                 "hop", "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks")
+                 "hop", "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks", "size")
 
 
 def _wall_default():
@@ -129,12 +129,13 @@ class Transport(Receiving):
         # only the origin compresses: a relay forwards the body as the
         # origin chose it (a second try would not shrink it and costs a
         # relay its compression tables, 2.5 KiB, on every packet)
-        if not compressed and not p.relayed and self.compress and len(body) > 16:
+        if body is not None and not compressed and not p.relayed and self.compress and len(body) > 16:
             from .compress import compress  # loaded by the first packet of its own
 
             z = compress(body)
             if len(z) < len(body):
                 p.body, p.compressed = z, True
+        p.size = 0 if p.body is None else len(p.body)
         return p
 
     def _keep(self, p):
@@ -147,6 +148,10 @@ class Transport(Receiving):
         except StoreFull:
             self.stats["store_full"] += 1
             return False
+        # from now on the body is in the store only, read back while the
+        # packet is sent: a buoy holding packets while its uplink is down
+        # keeps their headers in RAM, not their bodies
+        p.body = None
         self._queue(p)
         return True
 
@@ -171,8 +176,8 @@ class Transport(Receiving):
         self._resumed = False
         for s in self.packets.recover():
             self._resumed = True
-            p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, s.body, s.compressed, s.medium)
-            p.chunks = s.chunks
+            p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, None, s.compressed, s.medium)
+            p.chunks, p.size = s.chunks, s.size
             self._queue(p)
         self._done = self.packets.done[-DONE_MEMORY:]
 
@@ -227,7 +232,7 @@ class Transport(Receiving):
             if ticks_diff(now, p.wait) < 0:
                 return
             p.wait = None
-        r = self.router.choose(p.final, len(p.body), p.prio, p.medium)
+        r = self.router.choose(p.final, p.size, p.prio, p.medium)
         if r is None:
             return
         link, hop = r
@@ -244,7 +249,12 @@ class Transport(Receiving):
         relay = None
         if p.relayed or p.final != hop:
             relay = (p.origin, p.final, p.prio, p.expiry - self.wall())
-        blob = sg.packet_header(p.pid, len(p.body), p.compressed, relay) + p.body
+        body = p.body if p.body is not None else self.packets.body(p.key)
+        if body is None or len(body) != p.size:
+            self._final(now, p, FAILED, "lost from the store")
+            return
+        blob = sg.packet_header(p.pid, p.size, p.compressed, relay) + body
+        body = None
         try:
             p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
         except ValueError as e:
@@ -293,7 +303,7 @@ class Transport(Receiving):
             if p.misses >= _STALL_POLLS:
                 p.misses = 0
                 self.router.stall(p.link, p.hop, now)
-                r = self.router.choose(p.final, len(p.body), p.prio, p.medium)
+                r = self.router.choose(p.final, p.size, p.prio, p.medium)
                 if r is not None and r[0] is not p.link:
                     self.stats["failovers"] += 1
                     self._abandon(now, p)

@@ -25,7 +25,7 @@ _MAX_RX = const(8)
 
 class _Room:
     # what the store's overflow rule needs to judge a packet not yet whole
-    __slots__ = ("body", "prio", "medium")
+    __slots__ = ("size", "prio", "medium")
 
 
 class Receiving:
@@ -110,7 +110,7 @@ class Receiving:
         if h.relay is None or h.relay[1] == self.node.node_id:
             return True  # for this node: delivered, never stored
         q = _Room()
-        q.body, q.prio, q.medium = b"\0" * h.length, h.relay[2], None
+        q.size, q.prio, q.medium = h.length, h.relay[2], None
         if self.packets.room(q):
             return True
         self.stats["store_full"] += 1

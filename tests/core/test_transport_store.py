@@ -41,6 +41,38 @@ def test_a_restart_on_a_file_store_resumes_the_transfer():
         st.close()
 
 
+def test_waiting_packets_keep_their_bodies_in_the_store_not_in_ram():
+    # A buoy whose uplink is down holds packets for hours: RAM keeps their
+    # headers, the store their bodies, read back when each is sent (also
+    # after a restart, which reads back the headers only)
+    with TempDir() as d:
+        st = Store(d.file("diver"), capacity_bytes=32768, max_record=256)
+        w, a, b, _, ta = net(stores={"diver": st})
+        w.channel.loss = 1.0  # nothing gets through for now
+        data = [Prng(20 + i).bytes(600) for i in range(3)]  # random: stored as they are
+        pids = [ta.send(w.now(), "buoy", x, 3600, 5) for x in data]
+        w.run(30000)
+        assert all(p.body is None and p.size == 600 for p in ta._out)
+        st.close()
+        st = Store(d.file("diver"), capacity_bytes=32768, max_record=256)
+        t2 = _restart(a, w, st)
+        assert sorted(t2.pending()) == sorted(pids)
+        assert all(p.body is None and p.size == 600 for p in t2._out)
+        w.channel.loss = 0.0
+        assert w.run(3600000, until=lambda: all(DELIVERED in statuses(a, pid) for pid in pids))
+        assert sorted(e[3] for e in packets(b)) == sorted(data)
+        st.close()
+
+
+def test_a_packet_whose_body_the_store_lost_fails_with_a_reason():
+    store = MemoryStore(max_record=256)
+    w, a, b, _, ta = net(stores={"diver": store})
+    pid = ta.send(w.now(), "buoy", Prng(5).bytes(300), 3600, 5)  # random: two records
+    store.delete((1 << 24) | ta._out[0].key)  # its second record rots away before it is sent
+    assert w.run(600000, until=lambda: FAILED in statuses(a, pid))
+    assert not packets(b) and ta.pending() == []
+
+
 def test_a_lifespan_keeps_counting_through_a_restart():
     w, a, b, _, ta = net()
     w.channel.loss = 1.0  # nothing gets through
@@ -184,6 +216,7 @@ class _Pkt:
         self.origin, self.final, self.pid, self.prio, self.expiry = 2, 1, pid, prio, 2000000000
         self.key = (2 << 16) | pid
         self.body, self.compressed, self.medium, self.chunks = body, False, None, 0
+        self.size = len(body)
 
 
 def test_a_full_store_can_still_move_the_packet_id_limit():

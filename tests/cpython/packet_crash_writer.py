@@ -23,12 +23,13 @@ MAX_RECORD = 256
 
 class Pkt:
     # what PacketStore needs of a transport packet
-    __slots__ = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "chunks")
+    __slots__ = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "chunks", "size")
 
     def __init__(self, pid, body):
         self.origin, self.final, self.pid, self.prio, self.expiry = 2, 1, pid, 5, 2000000000
         self.key = (2 << 16) | pid
         self.body, self.compressed, self.medium, self.chunks = body, False, None, 0
+        self.size = len(body)
 
 
 def body(pid):
@@ -42,7 +43,7 @@ def main(path, seed):
     ps = PacketStore(Store(path, capacity_bytes=CAPACITY, max_record=MAX_RECORD))
     live = {}
     for s in ps.recover():
-        live[s.pid] = Pkt(s.pid, s.body)
+        live[s.pid] = Pkt(s.pid, ps.body(s.key))
         live[s.pid].chunks = s.chunks
     out = sys.stdout
 

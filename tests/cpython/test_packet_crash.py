@@ -35,7 +35,7 @@ def _recover(path):
     st = Store(chk, capacity_bytes=CAPACITY, max_record=MAX_RECORD)
     try:
         ps = PacketStore(st)
-        got = dict((s.pid, s.body) for s in ps.recover())
+        got = dict((s.pid, ps.body(s.key)) for s in ps.recover())
         return got, ps.next_pid()
     finally:
         st.close()
