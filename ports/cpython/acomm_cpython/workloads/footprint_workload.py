@@ -361,7 +361,9 @@ def run_i386(heap, mode="frozen", lib=None, rom=None, seed=1, info=False, limit_
                 "vfs.mount(vfs.VfsRom(r), '/rom')\nsys.path.insert(0, '/rom')\nimport acomm_lockstep\n"
                 "acomm_lockstep._ROM = r\nr = f = None\n%s" % (rom, rom, call))
     proc = subprocess.Popen([_i386(), "-X", "heapsize=%d" % size, "-c", code], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=tmp)
+    # cwd: the unix port looks in the current folder too, which must not
+    # hold acomm's sources (they would be compiled on the heap)
     pipe = _ProcPipe(proc)
     text = ""
     r = None
@@ -501,14 +503,16 @@ def _say(msg):
 
 
 def _heap_min_32(trial, label, emit, name, extra=()):
-    # a roomy run for the figures and an upper bound, then the bisection
+    # a roomy run for the figures and an upper bound, then the bisection;
+    # bytecode loaded from .mpy files takes the heap too, so those get more
     t0 = time.monotonic()
-    roomy = trial(ROOMY)
+    big = 2 * ROOMY if name.startswith("mpy") else ROOMY
+    roomy = trial(big)
     if roomy["fail"]:
         raise RuntimeError("%s: the buoy's minute failed even at %d bytes: %s\n%s"
-                           % (label, ROOMY, roomy["fail"], roomy["text"][-1500:]))
+                           % (label, big, roomy["fail"], roomy["text"][-1500:]))
     say = (lambda m: _say("%s %s" % (label, m))) if VERBOSE else None
-    emit("heap_min_%s_bytes" % name, bisect(trial, roomy["after_build"], ROOMY, say), "bytes")
+    emit("heap_min_%s_bytes" % name, bisect(trial, roomy["after_build"], big, say), "bytes")
     for k in extra:
         emit("heap_%s_%s_bytes" % (k.replace("code", "after_imports"), name), roomy[k], "bytes")
     _say("%s: %.0f s" % (label, time.monotonic() - t0))
