@@ -12,10 +12,18 @@
 # firmware. The unix port has no ROM partition: the image is read into one
 # bytearray first thing, and the caller subtracts its size from the heap.
 #
-# Protocol on stdin/stdout, binary, one exchange per simulated step:
+# Protocol on stdin/stdout, binary, one exchange per simulated step (a
+# board's UART passes one byte at a time under QEMU, so quiet steps are one
+# byte each way):
+#   out, once the node is built: b"LOCK" (what comes before is not the
+#        protocol: mem_info with info=True, or a traceback)
 #   in:  b"T" now(4, big-endian) then per link: length(2) bytes
+#        0x80 | dt: a quiet step, the clock moves on dt ms (< 128), no bytes
 #        b"Q": stop; the process prints one JSON line of figures
-#   out: per link: length(2) bytes the board wrote to that UART
+#   out: 0 (no UART wrote) or 1 then per link: length(2) bytes the board
+#        wrote to that UART
+#
+# Nothing is allocated per step: the harness is measured with the buoy.
 import gc
 import sys
 
@@ -35,23 +43,37 @@ def _mount_rom(path):
 
 
 _ROM = None
+_ONE = bytearray(1)
+_HDR = bytearray(4)
+_INP = None
+
+
+def _read_into(buf, n):
+    # n bytes from the ocean into buf[0:n]; no allocation (a short read is
+    # finished one byte at a time)
+    got = _INP.readinto(buf, n) or 0
+    while got < n:
+        if not _INP.readinto(_ONE, 1):
+            raise SystemExit(3)
+        buf[got] = _ONE[0]
+        got += 1
 
 
 class _Uart:
     # machine.UART as a board has it, behind the port's own UartStream: the
     # receive ring acomm_mp.start asks for (the link's rxbuf) and the
     # RP2040 port's default 256-byte transmit buffer, both on the heap
-    # as on the board and allocated once, so the harness allocates nothing
-    # per step but the bytes each read returns (machine.UART.read allocates
-    # them too). Bytes beyond a full ring are lost, as in an overrun; a full
-    # transmit buffer takes part of a write (the node keeps the rest).
+    # as on the board and allocated once. Nothing here allocates per step
+    # but the bytes each read() returns, as machine.UART.read allocates them
+    # too: no slices, no memoryviews made per call otherwise (bytes are
+    # copied one by one, a few per step). Bytes beyond a full ring are lost, as in an overrun;
+    # a full transmit buffer takes part of a write (the node keeps the rest).
     def __init__(self, rxbuf=1024, txbuf=256):
         self.rx = bytearray(rxbuf)
-        self.rmv = memoryview(self.rx)
+        self.rmv = memoryview(self.rx)  # read() slices it: no copy but the bytes
         self.head = 0
         self.count = 0
         self.tx = bytearray(txbuf)
-        self.tmv = memoryview(self.tx)
         self.tn = 0
         self.overruns = 0
 
@@ -60,55 +82,42 @@ class _Uart:
 
     def read(self, n):
         # timeout=0, as acomm_mp.start opens it: what is waiting, up to n,
-        # in one new bytes object, as machine.UART.read allocates it
+        # in one new bytes object (two pieces when it wraps the ring)
         n = min(n, self.count)
         if not n:
             return None
-        size = len(self.rx)
+        rx = self.rmv
+        size = len(rx)
         h = self.head
         if h + n <= size:
-            out = bytes(self.rmv[h : h + n])
+            out = bytes(rx[h : h + n])
         else:
-            out = bytes(self.rmv[h:size]) + bytes(self.rmv[: n - (size - h)])
+            out = bytes(rx[h:size]) + bytes(rx[: n - (size - h)])
         self.head = (h + n) % size
         self.count -= n
         return out
 
     def write(self, data):
-        n = min(len(data), len(self.tx) - self.tn)
-        self.tmv[self.tn : self.tn + n] = memoryview(data)[:n]
-        self.tn += n
+        tx = self.tx
+        t = self.tn
+        n = min(len(data), len(tx) - t)
+        for i in range(n):
+            tx[t + i] = data[i]
+        self.tn = t + n
         return n
 
-    def fill(self, inp, n):
+    def fill(self, n):
         # n bytes from the ocean process into the ring
-        size = len(self.rx)
+        rx = self.rx
+        size = len(rx)
         while n:
-            tail = (self.head + self.count) % size
-            k = min(n, size - self.count, size - tail)
-            if k:
-                _read_into(inp, self.rmv[tail : tail + k])
-                self.count += k
+            _read_into(_ONE, 1)
+            if self.count < size:
+                rx[(self.head + self.count) % size] = _ONE[0]
+                self.count += 1
             else:
-                k = min(n, len(_SCRATCH))
-                _read_into(inp, memoryview(_SCRATCH)[:k])
-                self.overruns += k
-            n -= k
-
-
-_SCRATCH = bytearray(64)
-# a bare-metal port's stdout has no flush(): what it writes goes straight out
-_FLUSH = hasattr(sys.stdout.buffer, "flush")
-_HDR = bytearray(5)
-
-
-def _read_into(inp, mv):
-    got = 0
-    while got < len(mv):
-        k = inp.readinto(mv[got:])
-        if not k:
-            raise SystemExit(3)
-        got += k
+                self.overruns += 1
+            n -= 1
 
 
 def _store(path):
@@ -121,11 +130,25 @@ def _store(path):
     return open_store
 
 
-def main(path, store_path, rom=None):
+def _mem_info(label):
+    import micropython
+
+    print("== %s: gc.mem_alloc() = %d, gc.mem_free() = %d" % (label, gc.mem_alloc(), gc.mem_free()))
+    micropython.mem_info()
+
+
+def main(path, store_path, rom=None, info=False):
     """Runs the board of config file `path` in lock with the ocean on stdin/stdout until b"Q"."""
-    global _ROM
+    global _ROM, _INP
     if rom:
         _ROM = _mount_rom(rom)
+    try:
+        # on a board's UART the byte 0x03 would be a Ctrl-C
+        import micropython
+
+        micropython.kbd_intr(-1)
+    except (ImportError, AttributeError):
+        pass
     from acomm_mp.assemble import build
 
     # the config as start("config") loads it: by module name, released once
@@ -149,6 +172,8 @@ def main(path, store_path, rom=None):
 
     gc.collect()
     code = gc.mem_alloc()
+    if info:
+        _mem_info("after imports")
     from acomm_mp.uartstream import UartStream
 
     ports = []
@@ -161,43 +186,80 @@ def main(path, store_path, rom=None):
     clock = [0]
     board = build(cfg, open_uart, lambda: clock[0], lambda: 1000000 + clock[0] // 1000, _store(store_path),
                   listener=lambda ev: None, say=lambda s: None)
+    cfg = None
     gc.collect()
     base = gc.mem_alloc()
+    if info:
+        _mem_info("after build")
     peak = base
-    inp = sys.stdin.buffer
+    _INP = inp = sys.stdin.buffer
     out = sys.stdout.buffer
-    hdr = memoryview(_HDR)
+    flush = getattr(out, "flush", None)  # bare-metal stdout has none
+    hdr = _HDR
+    # the ocean starts stepping once it reads this: whatever came before
+    # (an error while importing or building) is not the protocol
+    out.write(b"LOCK")
+    if flush:
+        flush()
+    now = 0
     while True:
-        _read_into(inp, hdr[:1])
-        if _HDR[0] == ord("Q"):
+        _read_into(hdr, 1)
+        c = hdr[0]
+        if c == 81:  # b"Q"
             break
-        _read_into(inp, hdr[:4])
-        now = int.from_bytes(_HDR[:4], "big")
+        if c & 0x80:
+            # a quiet step: the clock moves on, no bytes for any UART
+            now += c & 0x7F
+        else:
+            _read_into(hdr, 4)
+            now = (hdr[0] << 24) | (hdr[1] << 16) | (hdr[2] << 8) | hdr[3]
+            for u in ports:
+                _read_into(hdr, 2)
+                u.fill((hdr[0] << 8) | hdr[1])
         clock[0] = now
-        for u in ports:
-            _read_into(inp, hdr[:2])
-            u.fill(inp, (_HDR[0] << 8) | _HDR[1])
         board.tick(now)
         a = gc.mem_alloc()
         if a > peak:
             peak = a
+        quiet = 0
         for u in ports:
-            _HDR[0] = u.tn >> 8
-            _HDR[1] = u.tn & 0xFF
-            out.write(hdr[:2])
-            out.write(u.tmv[: u.tn])
-            u.tn = 0
-        if _FLUSH:
-            out.flush()
+            quiet |= u.tn
+        hdr[0] = 1 if quiet else 0
+        out.write(hdr, 0, 1)
+        if quiet:
+            for u in ports:
+                hdr[0] = u.tn >> 8
+                hdr[1] = u.tn & 0xFF
+                out.write(hdr, 0, 2)
+                if u.tn:
+                    out.write(u.tx, 0, u.tn)
+                u.tn = 0
+        if flush:
+            flush()
     st = board.stats
     tx = rx = 0
     for name in board.node.links:
         s = board.node.links[name].stats
         tx += s.get("tx_frames", 0)
         rx += s.get("rx_frames", 0)
-    print('{"peak": %d, "after_build": %d, "code": %d, "oom": %d, "errors": %d, "tx_frames": %d, "rx_frames": %d, "relayed": %d, "rom": %d, "overruns": %d}'
-          % (peak, base, code, st["oom"], st["errors"], tx, rx, board.transport.stats["relayed"], len(_ROM) if _ROM else 0,
-             sum(u.overruns for u in ports)))
+    tr = board.transport
+    print('{"peak": %d, "after_build": %d, "code": %d, "oom": %d, "errors": %d, "tx_frames": %d, "rx_frames": %d, "relayed": %d, "rom": %d, "overruns": %d, "stored": %d}'
+          % (peak, base, code, st["oom"], st["errors"], tx, rx, tr.stats["relayed"], len(_ROM) if _ROM else 0,
+             sum(u.overruns for u in ports), _stored(tr)))
+    if info:
+        _mem_info("at the end")
+    try:
+        micropython.kbd_intr(3)
+    except (NameError, AttributeError):
+        pass
+
+
+def _stored(tr):
+    # packets in the buoy's custody at the end (in its store)
+    try:
+        return len(tr._out)
+    except AttributeError:
+        return -1
 
 
 if __name__ == "__main__":

@@ -75,7 +75,7 @@ def _workload_file(modname):
     return os.path.join(os.path.dirname(w.__file__), modname + ".py")
 
 
-def run(names, emit):
+def run(names, emit, only=None):
     mp = find_micropython()
     for name in names:
         mod = _workload(name)
@@ -84,7 +84,10 @@ def run(names, emit):
         def cp_emit(n, v, u):
             emit(n + "_cpython" if n in per_runtime else n, v, u)
 
-        mod.run(cp_emit)
+        if only:
+            mod.run(cp_emit, only=only)
+        else:
+            mod.run(cp_emit)
         if not per_runtime:
             continue
         if mp is None:
@@ -108,5 +111,9 @@ def main(args):
         else:
             print("%-45s %12.4g %s" % (name, value, unit), flush=True)
 
-    run(names, emit)
+    only = getattr(args, "only", None)
+    if only and names != ["footprint"]:
+        print("--only is for the footprint bench", file=sys.stderr)
+        return 2
+    run(names, emit, only)
     return 0

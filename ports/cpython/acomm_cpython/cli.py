@@ -10,6 +10,8 @@ def main(argv=None):
     b = sub.add_parser("bench", help="run a benchmark; prints JSON lines with --json")
     b.add_argument("name", help="core, queue, discovery, ..., compare, or all (all but compare)")
     b.add_argument("--json", action="store_true", help="one JSON object per line")
+    b.add_argument("--only", help="footprint: one group of figures (frozen_cortex_m, romfs_cortex_m, mpy_cortex_m, "
+                                  "frozen_i386, romfs_i386, mpy_i386, flash_text, unix64)")
 
     br = sub.add_parser("bridge", help="a gateway to another protocol: 'bridge imc' speaks IMC over UDP (DUNE, Neptus)")
     from . import bridgecmd

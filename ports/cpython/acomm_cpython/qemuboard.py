@@ -11,7 +11,9 @@
 # heap: the GC heap in bytes, set at boot (a word qemu's -device loader puts
 # at 0x21fffff8, read by the patched main.c), so one build serves every
 # size. rom: a ROMFS image loaded at the board's ROMFS partition
-# (0x21000000), mounted at /rom by the firmware's _boot.py.
+# (0x21000000), mounted at /rom by the firmware's _boot.py. flash: an image
+# of the board's littlefs (2 MiB, 4096-byte blocks) loaded at its RAM flash
+# (0x21400000), which _boot.py then mounts at / instead of making a new one.
 # A qemu that does not start raises QemuError with its stderr.
 import os
 import re
@@ -21,6 +23,7 @@ import time
 HEAP_WORD = 0x21FFFFF8
 HEAP_MAGIC = 0x48454150
 ROMFS_PART0 = 0x21000000
+RAM_FLASH = 0x21400000
 START_TIMEOUT_S = 10
 START_GRACE_S = 0.3
 
@@ -56,23 +59,25 @@ def firmware(name):
     return None
 
 
-def qemu_args(elf, heap=None, rom=None, serial="pty"):
+def qemu_args(elf, heap=None, rom=None, serial="pty", flash=None):
     args = ["qemu-system-arm", "-machine", "mps2-an385", "-display", "none", "-monitor", "null", "-semihosting",
             "-serial", serial, "-kernel", elf]
     if heap:
         args += ["-device", "loader,addr=0x%x,data=0x%x,data-len=8" % (HEAP_WORD, (HEAP_MAGIC << 32) | int(heap))]
     if rom:
         args += ["-device", "loader,file=%s,addr=0x%x,force-raw=on" % (rom, ROMFS_PART0)]
+    if flash:
+        args += ["-device", "loader,file=%s,addr=0x%x,force-raw=on" % (flash, RAM_FLASH)]
     return args
 
 
 class QemuBoard:
     """qemu-system-arm running `elf`; .port is the pty of its UART. Stop with stop() or `with`."""
 
-    def __init__(self, elf, heap=None, rom=None):
+    def __init__(self, elf, heap=None, rom=None, flash=None):
         if not elf or not os.path.isfile(elf):
             raise QemuError("no firmware %r: build it with 'make firmware'" % (elf,))
-        self.args = qemu_args(elf, heap, rom)
+        self.args = qemu_args(elf, heap, rom, flash=flash)
         self._t = None
         self.proc = subprocess.Popen(self.args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, preexec_fn=_die_with_parent)

@@ -1,0 +1,28 @@
+# The footprint bench on the 32-bit Cortex-M3 board (acomm bench footprint):
+# the buoy's node on MicroPython's qemu MPS2-AN385 firmware with acomm and
+# the lockstep harness frozen in (build/firmware/cm3-full.elf, made by
+# tools/firmware.py build), stepped over its UART in lock with the simulated
+# ocean for one minute. At a roomy heap the minute completes with frames
+# both ways, the diver's packet relayed and sane heap figures; at a heap far
+# too small the MemoryError is a failed run, never a pass.
+import pytest
+
+from acomm_cpython.qemuboard import firmware
+from acomm_cpython.workloads import footprint_workload as fw
+
+ELF = firmware("cm3-full")
+pytestmark = pytest.mark.skipif(ELF is None, reason="build/firmware/cm3-full.elf not built (python3 tools/firmware.py build)")
+
+
+def test_one_lockstep_minute_on_the_cortex_m3_board():
+    r = fw.run_qemu(ELF, 128 * 1024)
+    assert r["fail"] is None, r["text"][-2000:]
+    assert r["relayed"] == 1 and r["tx_frames"] > 0 and r["rx_frames"] > 0 and r["oom"] == 0
+    # the imports (frozen: objects only), then the node on top, then the
+    # garbage of a minute, all within the heap
+    assert 8 * 1024 < r["code"] < r["after_build"] < r["peak"] < 128 * 1024
+
+
+def test_a_heap_too_small_is_a_failure_not_a_pass():
+    r = fw.run_qemu(ELF, 24 * 1024)
+    assert r["fail"] is not None and "MemoryError" in r["fail"]
