@@ -149,15 +149,81 @@ def _ocean(cfg, seed):
     return w, ends, others
 
 
-def _minute(pipe, cfg, seed=1, ms=SIM_MS, deadline=None):
+def _minute(pipe, cfg, seed=1, ms=SIM_MS, deadline=None, iridium_down=False):
     # the buoy's minute: 15 s of quiet, then each peer's traffic (the
-    # diver's packet for shore, relayed by the buoy)
+    # diver's packet for shore, relayed by the buoy). iridium_down: the
+    # buoy's satellite modem has no signal, so nothing leaves its store
     w, ends, others = _ocean(cfg, seed)
+    if iridium_down:
+        _satellite(cfg, ends).set_bars(0)
+        # the diver sent the seeded packets (seed_store) before: its packet
+        # ids go on from there, as its own store keeps them, or the buoy
+        # would take its new packet for one it already holds
+        others["diver"][1].packets.pid = LOAD_PACKETS
     w.add_task(_Lockstep(pipe, [e[1] for e in ends], deadline))
     w.run(15000)
     send_traffic(w, cfg, others, VIA)
     w.run(ms - 15000)
     return w
+
+
+def _satellite(cfg, ends):
+    # the emulator of the board's Iridium modem among its modem ends
+    for lk, e in zip(cfg["links"], ends):
+        if lk["modem"] == "iridium":
+            return e[0]
+    raise RuntimeError("the board has no Iridium link")
+
+
+LOAD_PACKETS = 8
+LOAD_BYTES = 1024
+
+
+def seed_store(path, n=LOAD_PACKETS, size=LOAD_BYTES, seed=1):
+    """Writes the buoy's store file as its transport leaves it after relaying n packets of `size` bytes for shore while Iridium is down.
+
+    The buoy's own node (acomm_mp.assemble.build, its config, a Store on a
+    file) runs here in the simulated ocean, and the diver sends the packets
+    through it: the file holds exactly what the buoy's transport stored
+    (random bodies: nothing compresses them). Then the board starts from
+    that file, as a buoy does after a reset with packets waiting.
+    """
+    from acomm.prng import Prng
+    from acomm.store import Store
+    from acomm_mp.assemble import build
+    from acomm_sim.boardsim import board_ends
+
+    cfg = boardfiles.load_config(boardfiles.board_path(BOARD))
+    w = World(seed=seed)
+    wall = lambda: 1000000 + w.now() // 1000  # noqa: E731
+    ends = []
+    stores = []
+
+    def open_uart(lk):
+        ends.append(board_ends(w, lk, (0.0, 0.0, 0.0) if not ends else None))
+        return ends[-1][1]
+
+    def open_store(st):
+        stores.append(Store(path, capacity_bytes=st["capacity"], max_record=st["max_record"]))
+        return stores[-1]
+
+    events = []
+    board = build(cfg, open_uart, w.clock, wall, open_store, listener=events.append, say=lambda s: None)
+    w.adopt(cfg["name"], board.node, ends, step=board.tick, events=events)
+    _satellite(cfg, ends).set_bars(0)
+    others = add_peers(w, cfg, PEERS, VIA, wall)
+    w.run(15000)
+    diver = others["diver"][1]
+    for i in range(n):
+        diver.send(w.now(), "shore", Prng(seed * 1000 + i).bytes(size), 86400, 6)
+    if not w.run(3600000, until=lambda: board.transport.stats["relayed"] >= n):
+        raise RuntimeError("seeding the buoy's store: %d of %d packets relayed in an hour"
+                           % (board.transport.stats["relayed"], n))
+    held = len(board.transport._out)
+    stores[0].close()
+    if held != n:
+        raise RuntimeError("seeding the buoy's store: it holds %d packets, not %d" % (held, n))
+    return path
 
 
 def build_romfs(lib_dir, out):
@@ -275,13 +341,15 @@ def _read_until(ser, ends, limit_s):
     return buf
 
 
-def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LIMIT_S):
+def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LIMIT_S, store=None):
     """One buoy minute on the qemu Cortex-M3 board with a GC heap of `heap` bytes.
 
     The harness (frozen as acomm_lockstep, or from /rom or /lib as .mpy) is
     started through the raw REPL and speaks the lockstep protocol on the
     UART. rom: a ROMFS image (mounted at /rom); flash: a littlefs image of
-    the board's filesystem (the .mpy files under /lib). -> dict: the board's
+    the board's filesystem (the .mpy files under /lib); store: the contents
+    of the buoy's store file (seed_store) to start from, with Iridium down
+    for the minute. -> dict: the board's
     figures, "fail" (None on a pass, else why) and "text" (what the board
     printed besides the protocol: mem_info with info, tracebacks).
     """
@@ -297,13 +365,15 @@ def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LI
         t.serial.timeout = 15
         t.enter_raw_repl(soft_reset=False)
         t.fs_writefile("/config.py", _config_text().encode())
+        if store is not None:
+            t.fs_writefile("/store", store)
         t.exec_raw_no_follow("import acomm_lockstep\nacomm_lockstep.main('/config.py', '/store', None, %r)" % bool(info))
         pre = _read_until(t.serial, (b"LOCK", b"\x04>"), 60)
         if not pre.endswith(b"LOCK"):
             text = pre
             raise EOFError("the harness did not start")
         text = pre[:-4]
-        _minute(_SerialPipe(t.serial), cfg, seed, SIM_MS, deadline)
+        _minute(_SerialPipe(t.serial), cfg, seed, SIM_MS, deadline, iridium_down=store is not None)
         t.serial.write(b"Q")
         tail = _read_until(t.serial, (b"\x04>",), 30)
         text += tail
@@ -319,6 +389,8 @@ def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LI
     why = _judge(r)
     if why and b"MemoryError" in text:
         why = "MemoryError (%s)" % why
+    if why is None and store is not None and r["stored"] != LOAD_PACKETS + 1:
+        why = "the store holds %d packets (%d expected)" % (r["stored"], LOAD_PACKETS + 1)
     out["fail"] = why
     out["text"] = text.decode(errors="replace")
     return out
@@ -522,7 +594,7 @@ def _heap_min_32(trial, label, emit, name, extra=()):
 VERBOSE = False
 
 # --only NAME: each group of figures and what it needs
-GROUPS = ("frozen_cortex_m", "romfs_cortex_m", "mpy_cortex_m", "frozen_i386", "romfs_i386", "mpy_i386",
+GROUPS = ("frozen_cortex_m", "loaded_cortex_m", "romfs_cortex_m", "mpy_cortex_m", "frozen_i386", "romfs_i386", "mpy_i386",
           "flash_text", "unix64")
 
 
@@ -531,6 +603,21 @@ def _group(name, emit, ctx):
         elf = _fw("cm3-full")
         r = _heap_min_32(lambda h: run_qemu(elf, h), name, emit, "frozen_cortex_m", ("code", "after_build", "peak"))
         ctx["empty"] = r
+    elif name == "loaded_cortex_m":
+        # the buoy holding LOAD_PACKETS packets of LOAD_BYTES while it
+        # relays the diver's traffic and Iridium is down
+        elf = _fw("cm3-full")
+        with open(seed_store(os.path.join(ctx["tmp"], "store")), "rb") as f:
+            data = f.read()
+        r = _heap_min_32(lambda h: run_qemu(elf, h, store=data), name, emit, "frozen_cortex_m_loaded",
+                         ("after_build",))
+        empty = ctx.get("empty") or run_qemu(elf, ROOMY)
+        if empty["fail"]:
+            raise RuntimeError("the buoy's minute failed at %d bytes: %s" % (ROOMY, empty["fail"]))
+        # what each packet waiting in the store costs in RAM (its header;
+        # the body stays in the store until it is sent)
+        emit("heap_per_stored_packet_cortex_m_bytes", (r["after_build"] - empty["after_build"]) // LOAD_PACKETS, "bytes")
+        emit("store_file_loaded_bytes", len(data), "bytes")
     elif name in ("romfs_cortex_m", "mpy_cortex_m"):
         elf = _fw("cm3-plain")
         st = ctx.setdefault("armv7m", _Staged(ctx["tmp"], "armv7m"))
@@ -634,6 +721,9 @@ def _one(name, heap, info):
     try:
         if name == "frozen_cortex_m":
             r = run_qemu(_fw("cm3-full"), heap, info=info)
+        elif name == "loaded_cortex_m":
+            with open(seed_store(os.path.join(tmp, "store")), "rb") as f:
+                r = run_qemu(_fw("cm3-full"), heap, info=info, store=f.read())
         elif name in ("romfs_cortex_m", "mpy_cortex_m"):
             st = _Staged(tmp, "armv7m")
             kw = {"rom": st.rom()} if name.startswith("romfs") else {"flash": st.lfs()}
