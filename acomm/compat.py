@@ -8,7 +8,10 @@
 # ticks: acomm keeps its own millisecond clock domain with a period of 2**30 on
 #   every runtime (the period of 32-bit MCUs). Times are compared only with
 #   ticks_diff, never with < or >, so wrap-around is safe, and the CPython tests
-#   exercise it because the period is small.
+#   exercise it because the period is small. ticks_add takes a delta of
+#   less than half the period either way, as MicroPython's does on a 32-bit
+#   board, and raises OverflowError otherwise on every runtime: a deadline
+#   half a period or more ahead could not be told from one in the past.
 
 try:
     import micropython
@@ -41,6 +44,9 @@ IS_MICROPYTHON = hasattr(time, "ticks_ms")
 
 
 def _py_ticks_add(ticks, delta):
+    # ticks + delta in the domain; |delta| < 2**29 (OverflowError otherwise)
+    if not -_TICKS_HALF < delta < _TICKS_HALF:
+        raise OverflowError("ticks interval overflow")
     return (ticks + delta) & TICKS_MAX
 
 

@@ -39,26 +39,53 @@ def main(argv):
     root = _here() + "/.."
     dirs = []
     pattern = None
+    frozen = False
+    impl = sys.implementation.name
     i = 0
     while i < len(argv):
         if argv[i] == "-k":
             pattern = argv[i + 1]
             i += 2
             continue
+        if argv[i] == "--name":
+            impl = argv[i + 1]
+            i += 2
+            continue
+        if argv[i] == "--frozen":
+            frozen = True
+            i += 1
+            continue
         dirs.append(argv[i])
         i += 1
     if not dirs:
         dirs = [root + "/tests/core"]
-    # the core, the simulator's portable emulators (driver tests use them)
-    # and the MicroPython port (its board assembly runs in the simulator)
-    for p in (root + "/ports/micropython", root + "/ports/sim", root):
-        if p not in sys.path:
-            sys.path.insert(0, p)
+    if frozen:
+        # after the frozen modules: acomm and acomm_mp are the firmware's
+        at = sys.path.index(".frozen") + 1 if ".frozen" in sys.path else len(sys.path)
+        sys.path.insert(at, root + "/ports/sim")
+        import acomm
+        import acomm_mp
+
+        where = (acomm.__file__, acomm_mp.__file__)
+        if where != ("acomm/__init__.py", "acomm_mp/__init__.py"):
+            print("%s: acomm is not frozen here: %s %s" % (impl, where[0], where[1]))
+            print("%s: 0 passed, 1 failed" % impl)
+            return 1
+        del acomm, acomm_mp
+        sys.modules.pop("acomm", None)
+        sys.modules.pop("acomm_mp", None)
+    else:
+        # the core, the simulator's portable emulators (driver tests use
+        # them) and the MicroPython port (its board assembly runs in the
+        # simulator)
+        for p in (root + "/ports/micropython", root + "/ports/sim", root):
+            if p not in sys.path:
+                sys.path.insert(0, p)
+        at = 0
     passed = failed = 0
     failures = []
-    impl = sys.implementation.name
     for d in dirs:
-        sys.path.insert(0, d)
+        sys.path.insert(at, d)
         names = sorted(n for n in os.listdir(d) if n.startswith("test_") and n.endswith(".py"))
         for fname in names:
             modname = fname[:-3]
@@ -101,7 +128,7 @@ def main(argv):
                 if m not in before:
                     sys.modules.pop(m, None)
             gc.collect()
-        sys.path.pop(0)
+        sys.path.pop(at)
     for f in failures:
         print("FAILED", f)
     print("%s: %d passed, %d failed" % (impl, passed, failed))

@@ -15,6 +15,11 @@ import math
 
 from ..errors import DecodeError, EncodeError
 
+# a few units in the last place of this runtime's float: double on CPython
+# and the unix ports, single on boards built with float32 (RP2040, ESP32,
+# the Cortex-M3 test firmware), where 1 + 2**-40 rounds to 1
+_ROUNDING = 2.0**-50 if 1.0 + 2.0**-40 != 1.0 else 2.0**-21
+
 
 def width(n):
     # Bits needed for the codes 0..n (MicroPython ints have no bit_length).
@@ -151,8 +156,12 @@ class Fixed(Scalar):
 
     def value(self, c):
         v = self.lo + c * self.res
-        # when steps*res overshoots hi, the top code still means hi
-        return self.hi if v > self.hi else v
+        # when steps*res overshoots hi, the top code still means hi; so it
+        # does when it falls short of hi by float rounding only (a board's
+        # float32 gives 89.999984 for -90 + 648000 * (1/3600))
+        if v > self.hi or (c == self.steps and self.hi - v <= (abs(self.lo) + abs(self.hi)) * _ROUNDING):
+            return self.hi
+        return v
 
 
 class Enum(Scalar):

@@ -3,6 +3,7 @@
 
 from acomm.codec.fields import Array, Bool, Bytes, Enum, Fixed, Nested, Optional, UInt
 from acomm.codec.text6 import ALPHABET, Text6
+from checks import near
 
 
 def _inner(f):
@@ -61,7 +62,7 @@ def same(f, sent, got):
     # True when got is what decoding sent must give
     f = _inner(f)
     if isinstance(f, Fixed):
-        return abs(sent - got) <= f.res / 2 + 1e-9 and f.lo <= got <= f.hi
+        return abs(sent - got) <= f.res / 2 + near(abs(f.lo) + abs(f.hi)) and f.lo <= got <= f.hi
     if isinstance(f, Optional):
         if sent is None or got is None:
             return sent is None and got is None

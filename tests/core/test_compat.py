@@ -1,6 +1,7 @@
 from acomm.clock import ManualClock
 from acomm.compat import TICKS_MAX, TICKS_PERIOD, const, micropython, ticks_add, ticks_diff, ticks_less, ticks_ms
 from acomm.errors import AcommError, CRCError, DecodeError, EncodeError
+from checks import raises
 
 _SEVEN = const(7)
 
@@ -41,7 +42,12 @@ def test_ticks_diff_half_range():
     half = TICKS_PERIOD // 2
     # the largest forward distance that still reads as "later"
     assert ticks_diff(ticks_add(0, half - 1), 0) == half - 1
-    assert ticks_diff(ticks_add(0, half), 0) == -half
+    assert ticks_diff(ticks_add(0, -(half - 1)), 0) == -(half - 1)
+    # half a period or more either way is refused, as by MicroPython's own
+    # ticks_add on a 32-bit board: it would read as the other direction
+    for delta in (half, -half, half + 7, TICKS_PERIOD):
+        raises(OverflowError, ticks_add, 0, delta)
+    assert ticks_diff(ticks_add(ticks_add(0, half - 1), 1), 0) == -half
 
 
 def test_ticks_ms_in_domain():

@@ -10,7 +10,9 @@ CASES = 150  # per target: ~3000 inputs in all, a few seconds
 def _tmpdir():
     import os
 
-    p = "/tmp/acomm-fuzz-test"
+    from checks import tmp_root
+
+    p = tmp_root() + "/acomm-fuzz-test"
     try:
         os.mkdir(p)
     except OSError:

@@ -8,6 +8,7 @@ from acomm.crc import crc16
 from acomm.errors import DecodeError, EncodeError
 from acomm.imc import enums, fp64, messages, wire
 from acomm.prng import Prng
+from checks import DOUBLE, need_double
 
 REQUIRED = (150, 151, 152, 550, 814, 815, 816, 817, 818, 515, 516)
 
@@ -93,6 +94,7 @@ def test_round_trip_the_listed_messages():
 
 
 def test_round_trip_every_message_in_the_table():
+    need_double("IMC's fp64 fields")
     rng = Prng(21)
     for mgid in messages.known_ids():
         name, fields = messages.by_id(mgid)[1:]
@@ -269,7 +271,6 @@ def test_bad_values_raise_encode_errors():
         dict(tx, data=bytes(65514)),
         dict(tx, data=bytes(65510)),  # fits as rawdata, not in a packet
         dict(tx, sdt_dst="typo"),
-        {"abbrev": "UamRxRange", "value": 1e39},
         {"abbrev": "UamRxRange", "value": "1"},
         {"abbrev": "Announce", "lat": "north"},
         {"abbrev": "TransmissionRequest", "msg_data": {"abbrev": "Nope"}},
@@ -279,6 +280,8 @@ def test_bad_values_raise_encode_errors():
         None,
         {"abbrev": ["list"]},
     )
+    if DOUBLE:  # beyond fp32; a float32 board has no such number (it reads inf)
+        bads += ({"abbrev": "UamRxRange", "value": 1e39},)
     for m in bads:
         try:
             imc.encode(m)

@@ -9,6 +9,7 @@ from acomm.crc import crc16
 from acomm.errors import CRCError, DecodeError, EncodeError
 from acomm.imc import fp64
 from acomm.prng import Prng
+from checks import need_double
 
 TS = 1700000000
 NAME = "lauv-xplore-1"
@@ -110,6 +111,7 @@ BE_VECTORS = (
 
 
 def test_encoder_reproduces_every_vector():
+    need_double("IMC's fp64 fields")
     for msg, src_ent, dst, want in VECTORS:
         got = imc.encode(msg, src=0x1234, dst=dst, timestamp=TS, src_ent=src_ent, dst_ent=0xFF)
         assert got == unhexlify(want), msg["abbrev"]
@@ -146,6 +148,7 @@ def test_decoder_reads_every_vector_in_both_orders():
 
 
 def test_exact_decode_keeps_fp64_bits():
+    need_double("IMC's fp64 fields")
     p = imc.decode(unhexlify(VECTORS[4][3]), exact=True)
     assert p.timestamp == imc.F64(0x41D954FC40000000)
     assert p.timestamp.micros() == TS * 1000000
@@ -158,6 +161,7 @@ def test_exact_decode_keeps_fp64_bits():
 
 
 def test_timestamp_from_integers():
+    need_double("IMC's fp64 fields")
     # 1.7e9 s with microseconds: the MCU's way in, exact to the bit
     t = imc.F64.seconds(TS, 250000)
     assert t.bits == struct.unpack("<Q", struct.pack("<d", 1700000000.25))[0]
@@ -230,6 +234,7 @@ def test_from_ratio_subnormals_and_limits():
 
 
 def test_float_patterns_match_struct():
+    need_double("IMC's fp64 fields")
     # every finite pattern reads to the float struct reads, and back
     rng = Prng(9)
     for i in range(2000):

@@ -3,7 +3,7 @@
 # Nodes whose Links drive SeatracDrivers over FakeUART lines to emulated
 # beacons on one acoustic medium, through every fault mode.
 from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
-from acomm.compat import TICKS_MAX
+from acomm.compat import TICKS_MAX, ticks_add
 from acomm.drivers import seatrac_wire as w
 from acomm.drivers.seatrac import SeatracDriver
 from acomm.events import (
@@ -506,12 +506,15 @@ def test_medium_delay_loss_and_half_duplex():
     m.attach(2, b)
     m.attach(3, c)
     m.set_distance(1, 3, 1500.0)
-    m.transmit(TICKS_MAX - 100, 1, "p", 500)  # across the tick wrap
-    m.poll(TICKS_MAX - 100 + 599)
+    # across the tick wrap (times stay in the ticks domain: a 32-bit board's
+    # C ticks_diff reads only small ints)
+    t0 = TICKS_MAX - 100
+    m.transmit(t0, 1, "p", 500)
+    m.poll(ticks_add(t0, 599))
     assert b.got == [] and a.got == []
-    m.poll(TICKS_MAX - 100 + 600)
-    assert b.got == [((TICKS_MAX + 500) & TICKS_MAX, 1, "p", 150.0)]
-    m.poll(TICKS_MAX - 100 + 1500)
+    m.poll(ticks_add(t0, 600))
+    assert b.got == [(ticks_add(t0, 600), 1, "p", 150.0)]
+    m.poll(ticks_add(t0, 1500))
     assert len(c.got) == 1 and c.got[0][3] == 1500.0
     # half-duplex: 2 starts transmitting while 1's packet arrives
     m.transmit(5000, 1, "q", 500)

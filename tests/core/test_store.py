@@ -4,7 +4,7 @@
 import os
 from collections import OrderedDict
 
-from checks import TempDir, raises
+from checks import TempDir, raises, skip
 
 from acomm.crc32 import crc32, crc32_pure
 from acomm.errors import AcommError, EncodeError, StoreError, StoreFull
@@ -255,8 +255,27 @@ def test_flipped_byte_drops_only_that_record():
             os.remove(p)
 
 
+def _open_file_sees_other_writes(path):
+    # False on littlefs (a board's filesystem): an open file keeps its view
+    # of the file as it was opened and does not see what another handle
+    # wrote since. Read far from where `a` read first, so that a buffer of
+    # CPython's (8 KiB) does not answer from memory instead.
+    _write(path, bytes(32768))
+    with open(path, "rb") as a:
+        a.read(1)
+        with open(path, "r+b") as b:
+            b.seek(30000)
+            b.write(b"ZZ")
+        a.seek(30000)
+        seen = a.read(2) == b"ZZ"
+    os.remove(path)
+    return seen
+
+
 def test_rot_after_open_is_caught_by_get():
     with _Dir() as d:
+        if not _open_file_sees_other_writes(d.file("probe")):
+            skip("rot written through a second handle is not seen by the store's open file on this filesystem")
         s = Store(d.file())
         for k in range(3):
             s.put(k, _data(k))

@@ -7,7 +7,7 @@ from acomm.clock import ManualClock
 from acomm.compat import TICKS_MAX
 from acomm.errors import DecodeError, EncodeError
 from acomm.prng import Prng
-from checks import raises
+from checks import near, raises
 
 Z = T.NEUTRAL
 
@@ -25,7 +25,7 @@ def _vec(values):
 
 def _close(a, b):
     # decoded thrust equals the quantized command up to float rounding
-    return len(a) == len(b) and all(abs(a[i] - b[i]) < 1e-9 for i in range(len(a)))
+    return len(a) == len(b) and all(abs(a[i] - b[i]) < near(2) for i in range(len(a)))
 
 
 def test_sizes():
@@ -46,7 +46,7 @@ def test_thrust_boundaries_round_trip_exactly():
                 assert name == "thrust" and out["seq"] == seq
                 got = _vec(out)
                 for k in range(6):
-                    assert abs(got[k] - vec[k]) < 1e-9, (v, i, got)
+                    assert abs(got[k] - vec[k]) < near(2), (v, i, got)
     # neutral is exact
     assert _close(_vec(_wire(("thrust", T.thrust_values(Z, 3)))[1]), Z)
 
@@ -57,7 +57,7 @@ def test_thrust_random_round_trip_within_half_step():
         vec = [rng.below(20001) / 10000 - 1 for _ in range(6)]
         got = _vec(_wire(("thrust", T.thrust_values(vec, rng.below(16))))[1])
         for k in range(6):
-            assert abs(got[k] - vec[k]) <= T.RES / 2 + 1e-9
+            assert abs(got[k] - vec[k]) <= T.RES / 2 + near(2)
 
 
 def test_thrust_strict_and_clamped():
@@ -89,7 +89,7 @@ def test_sender_event_triggered_beyond_threshold():
     assert s.update(clock(), (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)) is None
     assert s.update(clock(), (1 / 15, 0, 0, 0, 0, 0)) is None
     out = s.update(clock(), (2 / 15, 0, 0, 0, 0, 0))
-    assert out[0] == "thrust" and abs(out[1]["surge"] - 2 / 15) < 1e-9 and out[1]["seq"] == 2
+    assert out[0] == "thrust" and abs(out[1]["surge"] - 2 / 15) < near(2) and out[1]["seq"] == 2
     # compared with the last vector SENT: small steps cannot creep
     assert s.update(clock(), (3 / 15, 0, 0, 0, 0, 0)) is None
     assert s.update(clock(), (4 / 15, 0, 0, 0, 0, 0))[1]["surge"] == 4 / 15
