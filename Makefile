@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN = $(VENV)/bin
 
-.PHONY: demo test test-cpython test-micropython bench clean
+.PHONY: demo test test-cpython test-micropython test-firmware firmware bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV) || { echo "python3 -m venv failed: on Debian run 'apt-get install python3-venv' (trying it now)"; \
@@ -24,12 +24,40 @@ $(VENV)/.run: $(BIN)/python setup.cfg pyproject.toml
 demo: $(VENV)/.run
 	$(BIN)/acomm demo
 
-# Both runtimes always run; the target fails if either suite fails. The last
-# two lines of output are the counts of each runtime.
+# The firmware (tools/firmware.py): MicroPython's qemu Cortex-M3 port and
+# the i386 unix port with acomm frozen in, into build/firmware/, rebuilt
+# only when a source that goes into it changed. It installs the Debian
+# packages it needs when it runs as root; otherwise, or with no MicroPython
+# source (MPY_DIR, ../shared/vendor, a git clone), it says what is missing
+# and fails.
+firmware: $(VENV)/.dev
+	$(BIN)/python tools/firmware.py build
+
+# Every runtime runs and prints its own closing line: pytest on CPython,
+# then the core suite on the MicroPython unix port, on the Cortex-M3
+# firmware under qemu and on the i386 build. The target fails if any fails.
+# When the firmware cannot be built on this machine (exit 3), its two
+# runtimes are skipped with one line saying how to enable them; a firmware
+# build that fails is a failure.
+I386_HEAP = 2M
 test: $(VENV)/.dev
-	@$(BIN)/python -m pytest -q tests; a=$$?; \
+	@$(BIN)/python tools/firmware.py build; f=$$?; \
+	$(BIN)/python -m pytest -q tests; a=$$?; \
 	PATH="$(CURDIR)/$(BIN):$$PATH" $(BIN)/micropython tools/mp_runtests.py tests/core; b=$$?; \
-	test $$a -eq 0 && test $$b -eq 0
+	c=0; d=0; \
+	if [ $$f -eq 0 ]; then \
+	  $(BIN)/python tools/qemu_runtests.py; c=$$?; \
+	  build/firmware/micropython-i386 -X heapsize=$(I386_HEAP) tools/mp_runtests.py --frozen --name micropython-i386 tests/core; d=$$?; \
+	elif [ $$f -eq 3 ]; then \
+	  echo "micropython-cortex-m3, micropython-i386: skipped: the firmware cannot be built here (the firmware: line above says what is missing; then run make firmware)"; \
+	else \
+	  echo "micropython-cortex-m3, micropython-i386: not run: the firmware build failed (above)"; \
+	fi; \
+	test $$a -eq 0 && test $$b -eq 0 && test $$c -eq 0 && test $$d -eq 0 && test $$f -ne 1
+
+test-firmware: firmware
+	$(BIN)/python tools/qemu_runtests.py
+	build/firmware/micropython-i386 -X heapsize=$(I386_HEAP) tools/mp_runtests.py --frozen --name micropython-i386 tests/core
 
 test-cpython: $(VENV)/.dev
 	$(BIN)/python -m pytest -q tests

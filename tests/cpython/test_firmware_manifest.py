@@ -1,0 +1,70 @@
+# What the firmware builds froze (tools/firmware.py, `make firmware`): the
+# full manifest freezes every module of acomm and acomm_mp, on the Cortex-M3
+# and on the i386 unix build, and the buoy's firmware freezes exactly its
+# board's import closure, the modules `acomm flash` would copy. Read from
+# the frozen_content.c that MicroPython's mpy-tool wrote for each product,
+# so a module that mpy-tool cannot freeze (as the float literal of
+# acomm/imc/wire.py once was) fails the build, and one left out fails here.
+import os
+import re
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+WORK = os.path.join(ROOT, "build", "firmware", "work")
+
+
+def _frozen(product):
+    path = os.path.join(WORK, product, "build", "frozen_content.c")
+    if not os.path.exists(path):
+        pytest.skip("%s is not built: run `make firmware` (tools/firmware.py build)" % product)
+    with open(path) as f:
+        text = f.read()
+    names = text[text.index("mp_frozen_names[]") :]
+    names = names[: names.index("};")]
+    return set(re.findall(r'"([^"\\]+\.py)\\0"', names))
+
+
+def _package_modules(pkg_dir, pkg):
+    out = set()
+    for dirpath, _dirs, files in os.walk(pkg_dir):
+        for f in files:
+            if f.endswith(".py"):
+                rel = os.path.relpath(os.path.join(dirpath, f), os.path.dirname(pkg_dir))
+                out.add(rel.replace(os.sep, "/"))
+    assert out, pkg
+    return out
+
+
+def _every_module():
+    return _package_modules(os.path.join(ROOT, "acomm"), "acomm") | _package_modules(
+        os.path.join(ROOT, "ports", "micropython", "acomm_mp"), "acomm_mp"
+    )
+
+
+@pytest.mark.parametrize("product", ["cm3-full", "micropython-i386"])
+def test_the_full_manifest_freezes_every_module(product):
+    frozen = _frozen(product)
+    missing = sorted(_every_module() - frozen)
+    assert not missing, missing
+    # and the harness the footprint figures run (tools/lockstep)
+    assert "acomm_lockstep.py" in frozen
+
+
+def test_the_buoy_firmware_freezes_its_import_closure_and_nothing_else_of_acomm():
+    frozen = _frozen("cm3-buoy")
+    for p in (os.path.join(ROOT, "ports", "cpython"), os.path.join(ROOT, "ports", "micropython")):
+        if p not in sys.path:
+            sys.path.insert(0, p)
+    from acomm_cpython import boardfiles
+
+    closure = set()
+    for name, path in boardfiles.modules(os.path.join(ROOT, "boards", "buoy_pico"), root=ROOT).items():
+        pkg = name.split(".")[0]
+        top = os.path.join(boardfiles.package_dirs(ROOT)[pkg], "..")
+        closure.add(os.path.relpath(path, top).replace(os.sep, "/"))
+    ours = set(n for n in frozen if n.split("/")[0] in ("acomm", "acomm_mp"))
+    assert ours == closure, (sorted(ours - closure), sorted(closure - ours))
+    # the buoy never imports the IMC gateway; the full image does
+    assert not any(n.startswith("acomm/imc/") for n in ours)
