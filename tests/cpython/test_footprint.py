@@ -9,17 +9,17 @@ import os
 import shutil
 import tempfile
 
-from acomm_cpython.workloads import footprint_workload as fw
+from acomm_cpython.workloads import footprint_runners as fr
 
 
 def test_the_lockstep_minute_runs_and_a_tiny_heap_fails():
     tmp = tempfile.mkdtemp(prefix="acomm-fp-test-")
     try:
-        fl = fw._stage(tmp)
-        r = fw.run_once(fl, 256 * 1024)
+        fl = fr.stage_flash(tmp)
+        r = fr.run_once(fl, 256 * 1024)
         assert r is not None and r["relayed"] == 1 and r["tx_frames"] > 0 and r["rx_frames"] > 0
         assert r["after_build"] < r["peak"] < 2 * 256 * 1024
-        assert fw.run_once(fl, 16 * 1024) is None
+        assert fr.run_once(fl, 16 * 1024) is None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
@@ -27,10 +27,10 @@ def test_the_lockstep_minute_runs_and_a_tiny_heap_fails():
 def test_from_a_romfs_image_the_imports_take_less_heap():
     tmp = tempfile.mkdtemp(prefix="acomm-fp-test-")
     try:
-        fl = fw._stage(tmp)
-        rom = fw.build_romfs(os.path.join(fl, "lib"), os.path.join(tmp, "rom.img"))
-        files = fw.run_once(fl, 256 * 1024)
-        r = fw.run_once(fl, 256 * 1024, rom=rom)
+        fl = fr.stage_flash(tmp)
+        rom = fr.build_romfs(os.path.join(fl, "lib"), os.path.join(tmp, "rom.img"))
+        files = fr.run_once(fl, 256 * 1024)
+        r = fr.run_once(fl, 256 * 1024, rom=rom)
         assert r is not None and r["relayed"] == 1 and r["rom"] == os.path.getsize(rom)
         code_rom = (r["code"] - r["rom"]) // 2
         # the bytecode stays in the image: well under what loading took

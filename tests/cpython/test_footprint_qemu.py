@@ -8,14 +8,14 @@
 import pytest
 
 from acomm_cpython.qemuboard import firmware
-from acomm_cpython.workloads import footprint_workload as fw
+from acomm_cpython.workloads import footprint_runners as fr
 
 ELF = firmware("cm3-full")
 pytestmark = pytest.mark.skipif(ELF is None, reason="build/firmware/cm3-full.elf not built (python3 tools/firmware.py build)")
 
 
 def test_one_lockstep_minute_on_the_cortex_m3_board():
-    r = fw.run_qemu(ELF, 128 * 1024)
+    r = fr.run_qemu(ELF, 128 * 1024)
     assert r["fail"] is None, r["text"][-2000:]
     assert r["relayed"] == 1 and r["tx_frames"] > 0 and r["rx_frames"] > 0 and r["oom"] == 0
     # the imports (frozen: objects only), then the node on top, then the
@@ -24,5 +24,5 @@ def test_one_lockstep_minute_on_the_cortex_m3_board():
 
 
 def test_a_heap_too_small_is_a_failure_not_a_pass():
-    r = fw.run_qemu(ELF, 24 * 1024)
+    r = fr.run_qemu(ELF, 24 * 1024)
     assert r["fail"] is not None and "MemoryError" in r["fail"]
