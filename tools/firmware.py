@@ -161,8 +161,11 @@ def shadow(src, ident):
 
 def _missing_tools():
     miss = []
+    # Debian's gcc-arm-none-eabi does not pull in its C library: without
+    # the compiler, newlib is missing too (asking only for the compiler
+    # left a fresh machine, and CI, with no libc.a and no firmware).
     if shutil.which("arm-none-eabi-gcc") is None:
-        miss.append("gcc-arm-none-eabi")
+        miss += ["gcc-arm-none-eabi", "libnewlib-arm-none-eabi"]
     else:
         libc = subprocess.run(["arm-none-eabi-gcc", "-print-file-name=libc.a"], capture_output=True, text=True).stdout
         if not os.path.isabs(libc.strip()):
