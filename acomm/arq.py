@@ -16,12 +16,14 @@ WINDOW = 1 + 8 * sg.MAX_BITMAP  # fragments one SACK speaks for, from its base
 
 
 class Outgoing:
-    # blob: the packet header and body as sent; fragsize: payload bytes per
-    # fragment on this hop.
+    # blob: the packet header and body as sent, bytes or an object with
+    # len() and read(offset, n) (acomm.packetstore.StoredBlob: the body
+    # stays in the store); fragsize: payload bytes per fragment on this hop.
     def __init__(self, blob, fragsize, lane, gen, pid):
         if fragsize < 1:
             raise ValueError("fragment size must be positive")
         self.blob = blob
+        self._read = getattr(blob, "read", None)
         self.fragsize = fragsize
         self.count = (len(blob) + fragsize - 1) // fragsize
         if self.count - 1 > sg.MAX_INDEX:
@@ -39,10 +41,14 @@ class Outgoing:
         self.probing = False  # see probe()
 
     def fragment(self, index, poll):
-        # -> (head, bytes): see acomm.segment
+        # -> (head, bytes): see acomm.segment; bytes None when the blob
+        # could not be read back (its store lost a record)
         start = index * self.fragsize
         head, first = sg.frag_header(poll, self.lane, self.gen, index)
-        return head, first + self.blob[start : start + self.fragsize]
+        if self._read is None:
+            return head, first + self.blob[start : start + self.fragsize]
+        part = self._read(start, self.fragsize)
+        return head, None if part is None else first + part
 
     def new_round(self):
         # The missing fragments the next SACK can speak for.

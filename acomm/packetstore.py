@@ -85,8 +85,54 @@ class MemoryStore:
 
 class Stored:
     # what recover() gives back for each packet
-    # body is None: the transport reads it back (body()) when it sends the packet
-    __slots__ = ("origin", "final", "pid", "prio", "expiry", "compressed", "medium", "body", "chunks", "size", "key")
+    # body is None: the transport reads it back (blob()) when it sends the packet
+    # at: where the body starts in chunk 0
+    __slots__ = ("origin", "final", "pid", "prio", "expiry", "compressed", "medium", "body", "chunks", "size", "key",
+                 "at")
+
+
+class StoredBlob:
+    # A packet as its transfer sends it, a packet header (head) and then the
+    # body, with the body left in the store: read() reads back only the
+    # records that hold the bytes asked for. A buoy sending a 1 KiB packet
+    # then holds a record or two at a time, not the body joined from its
+    # records and copied again behind the header: three allocations of the
+    # packet's size, its largest, made when its heap is fragmented.
+    __slots__ = ("head", "store", "key", "at", "first", "chunk", "size")
+
+    def __len__(self):
+        return len(self.head) + self.size
+
+    def read(self, off, n):
+        """Bytes off..off+n of head + body (fewer past the end); None when a record is gone or shorter than it was."""
+        head = self.head
+        out = b""
+        if off < len(head):
+            out = head[off : off + n]
+            n -= len(out)
+            off = 0
+        else:
+            off -= len(head)
+        end = off + n
+        if end > self.size:
+            end = self.size
+        first = self.first
+        while off < end:
+            if off < first:
+                i, a = 0, self.at + off
+                take = (end if end < first else first) - off
+            else:
+                i = 1 + (off - first) // self.chunk
+                a = (off - first) % self.chunk
+                take = self.chunk - a
+                if take > end - off:
+                    take = end - off
+            rec = self.store.get((i << 24) | self.key)
+            if rec is None or len(rec) < a + take:
+                return None
+            out += rec[a : a + take]
+            off += take
+        return out
 
 
 class PacketStore:
@@ -175,6 +221,16 @@ class PacketStore:
         s = self._load(key, True)
         return None if s is None else s.body
 
+    def blob(self, key, head):
+        """The packet with this key as sent, head then its body, which stays in the store (StoredBlob); None when a record of it is gone."""
+        s = self._load(key, False)
+        if s is None:
+            return None
+        b = StoredBlob()
+        b.head, b.store, b.key, b.at, b.size, b.chunk = head, self.store, key, s.at, s.size, self.chunk
+        b.first = self.chunk - s.at
+        return b
+
     def recover(self):
         # -> [Stored] without their bodies (a board's heap holds only what
         # it is sending); drops what a cut left incomplete
@@ -228,6 +284,7 @@ class PacketStore:
             except ValueError:  # UnicodeError on CPython
                 return None
             at += 1 + rec[at]
+        s.at = at
         s.size = len(rec) - at
         s.body = None
         parts = [rec[at:]] if with_body else None

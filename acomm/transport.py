@@ -249,12 +249,15 @@ class Transport(Receiving):
         relay = None
         if p.relayed or p.final != hop:
             relay = (p.origin, p.final, p.prio, p.expiry - self.wall())
-        body = p.body if p.body is not None else self.packets.body(p.key)
-        if body is None or len(body) != p.size:
-            self._final(now, p, FAILED, "lost from the store")
-            return
-        blob = sg.packet_header(p.pid, p.size, p.compressed, relay) + body
-        body = None
+        head = sg.packet_header(p.pid, p.size, p.compressed, relay)
+        if p.body is not None:
+            blob = head + p.body
+        else:
+            # the body stays in the store; fragments are read as they go
+            blob = self.packets.blob(p.key, head)
+            if blob is None or len(blob) != len(head) + p.size:
+                self._final(now, p, FAILED, "lost from the store")
+                return
         try:
             p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
         except ValueError as e:
@@ -321,9 +324,14 @@ class Transport(Receiving):
             if nf is None:
                 return
             self._request(p, now, nf)
+            if p.out is not o:
+                return  # it failed (a record of its body was lost)
 
     def _request(self, p, now, nf):
         index, head, data = nf
+        if data is None:
+            self._final(now, p, FAILED, "lost from the store")
+            return
         rid = self.node.next_req_id()
         life = p.expiry - self.wall()
         if life < 1:

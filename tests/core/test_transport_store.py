@@ -73,6 +73,48 @@ def test_a_packet_whose_body_the_store_lost_fails_with_a_reason():
     assert not packets(b) and ta.pending() == []
 
 
+def test_a_stored_blob_reads_what_the_joined_packet_holds():
+    # the transfer reads its fragments back from the records (StoredBlob)
+    # instead of holding header + body in RAM: every window of it must be
+    # the bytes the joined copy had, across record boundaries, with and
+    # without a medium name in chunk 0
+    for medium in (None, "satellite"):
+        ps = PacketStore(MemoryStore(max_record=64))
+        body = Prng(3).bytes(300)
+        p = _stored_packet(ps, body, medium)
+        head = b"HEADER!"
+        blob = ps.blob(p.key, head)
+        whole = head + body
+        assert len(blob) == len(whole)
+        for n in (1, 5, 27, 64, 100, 400):
+            for off in range(0, len(whole) + 3, 7):
+                assert blob.read(off, n) == whole[off : off + n], (medium, off, n)
+
+
+def _stored_packet(ps, body, medium):
+    from acomm.packetstore import Stored
+
+    p = Stored()
+    p.origin, p.final, p.pid, p.prio, p.expiry, p.compressed, p.medium = 1, 2, 9, 5, 1000, False, medium
+    p.body, p.size, p.key = body, len(body), (1 << 16) | 9
+    ps.put(p)
+    return p
+
+
+def test_a_record_lost_mid_transfer_fails_the_packet_once():
+    store = MemoryStore(max_record=64)
+    w, a, b, _, ta = net(loss=1.0, stores={"diver": store})  # nothing arrives: the transfer goes on
+    pid = ta.send(w.now(), "buoy", Prng(6).bytes(400), 3600, 5)  # random: 7 records
+    w.run(600000, until=lambda: ta.stats["fragments"] >= 2)
+    key = ta._out[0].key
+    store.delete((6 << 24) | key)  # a record of its tail rots away while it is sent
+    w.channel.loss = 0.0
+    assert w.run(1200000, until=lambda: FAILED in statuses(a, pid))
+    w.run(60000)
+    assert [s for s in statuses(a, pid) if s in (DELIVERED, FAILED, EXPIRED)] == [FAILED]
+    assert not packets(b) and ta.pending() == []
+
+
 def test_a_lifespan_keeps_counting_through_a_restart():
     w, a, b, _, ta = net()
     w.channel.loss = 1.0  # nothing gets through

@@ -202,6 +202,8 @@ def main(path, store_path, rom=None, info=False):
     if flush:
         flush()
     now = 0
+    if info:
+        _trace_oom(board.node)
     while True:
         _read_into(hdr, 1)
         c = hdr[0]
@@ -247,11 +249,35 @@ def main(path, store_path, rom=None, info=False):
           % (peak, base, code, st["oom"], st["errors"], tx, rx, tr.stats["relayed"], len(_ROM) if _ROM else 0,
              sum(u.overruns for u in ports), _stored(tr)))
     if info:
+        if _OOM:
+            # where the heap ran out first (the board counts and carries on)
+            print("== first MemoryError at %d ms, gc.mem_alloc() = %d, gc.mem_free() = %d" % _OOM[1])
+            sys.print_exception(_OOM[0])
         _mem_info("at the end")
     try:
         micropython.kbd_intr(3)
     except (NameError, AttributeError):
         pass
+
+
+_OOM = []
+
+
+def _trace_oom(node):
+    # info only: keeps the first MemoryError of a step and the heap then,
+    # printed at the end (the protocol owns stdout while the minute runs)
+    step = node.step
+
+    def traced(now):
+        try:
+            return step(now)
+        except MemoryError as e:
+            if not _OOM:
+                _OOM.append(e)
+                _OOM.append((now, gc.mem_alloc(), gc.mem_free()))
+            raise
+
+    node.step = traced
 
 
 def _stored(tr):
