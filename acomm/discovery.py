@@ -9,8 +9,13 @@
 
 from .compat import const, ticks_add, ticks_diff
 from .errors import DecodeError
-from .events import AVAILABLE, UNAVAILABLE, UNKNOWN
 from .prng import Prng
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_AVAILABLE = const(1)
+_UNAVAILABLE = const(2)
+_UNKNOWN = const(0)
 
 ADVERT_LEN = const(2)
 _PERIOD_UNIT_MS = const(4000)
@@ -64,7 +69,7 @@ class Discovery:
             if len(self._nodes) >= self._cap and not self._forget_one():
                 self.ignored += 1
                 return None
-            e = [now, period_ms or self.period_ms, UNKNOWN]
+            e = [now, period_ms or self.period_ms, _UNKNOWN]
             self._nodes[node_id] = e
         e[0] = now
         if period_ms:
@@ -72,14 +77,14 @@ class Discovery:
         due = ticks_add(now, e[1] * self.lost_after)
         if self._next is None or ticks_diff(due, self._next) < 0:
             self._next = due
-        if e[2] != AVAILABLE:
-            e[2] = AVAILABLE
-            return AVAILABLE
+        if e[2] != _AVAILABLE:
+            e[2] = _AVAILABLE
+            return _AVAILABLE
         return None
 
     def _forget_one(self):
         for k in self._nodes:
-            if self._nodes[k][2] == UNAVAILABLE:
+            if self._nodes[k][2] == _UNAVAILABLE:
                 del self._nodes[k]
                 return True
         return False
@@ -92,11 +97,11 @@ class Discovery:
         nxt = None
         for k in self._nodes:
             e = self._nodes[k]
-            if e[2] != AVAILABLE:
+            if e[2] != _AVAILABLE:
                 continue
             left = e[1] * self.lost_after - ticks_diff(now, e[0])
             if left <= 0:
-                e[2] = UNAVAILABLE
+                e[2] = _UNAVAILABLE
                 if lost is None:
                     lost = []
                 lost.append(k)
@@ -111,7 +116,7 @@ class Discovery:
 
     def state(self, node_id):
         e = self._nodes.get(node_id)
-        return UNKNOWN if e is None else e[2]
+        return _UNKNOWN if e is None else e[2]
 
     def last_heard(self, node_id):
         # ticks when a frame from node_id was last heard, or None
@@ -119,7 +124,7 @@ class Discovery:
         return None if e is None else e[0]
 
     def available(self):
-        return [k for k in self._nodes if self._nodes[k][2] == AVAILABLE]
+        return [k for k in self._nodes if self._nodes[k][2] == _AVAILABLE]
 
     def advert_due(self, now, last_tx):
         return last_tx is None or ticks_diff(now, last_tx) >= self._wait

@@ -28,34 +28,35 @@ from .linkframing import LinkFraming
 from .linkrange import MAX_LIFESPAN_MS, SLOT_IDLE, SLOT_SENDING, Ranging
 from .discovery import Discovery, decode_advert, encode_advert
 from .errors import AcommError, DecodeError
-from .events import (
-    AVAILABLE,
-    CANCELED,
-    DELIVERED,
-    EV_AVAILABILITY,
-    EV_CAPS,
-    EV_DELIVERED,
-    EV_DRIVER_DOWN,
-    EV_DRIVER_UP,
-    EV_RANGE,
-    EV_RECEIVED,
-    EV_REFUSED,
-    EV_SEGMENT,
-    EV_REPLIED,
-    EV_RX,
-    EV_STATUS,
-    EV_TX_DONE,
-    EV_TX_FAILED,
-    EXPIRED,
-    FAILED,
-    QUEUED,
-    TRANSMITTED,
-    TRANSMITTING,
-    UNAVAILABLE,
-    WAITING,
-)
 from .names import AddressMap
 from .txqueue import TxQueue, TxRequest
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_AVAILABLE = const(1)
+_CANCELED = const(7)
+_DELIVERED = const(5)
+_EV_AVAILABILITY = const(22)
+_EV_CAPS = const(23)
+_EV_DELIVERED = const(3)
+_EV_DRIVER_DOWN = const(7)
+_EV_DRIVER_UP = const(6)
+_EV_RANGE = const(5)
+_EV_RECEIVED = const(21)
+_EV_REFUSED = const(28)
+_EV_SEGMENT = const(25)
+_EV_REPLIED = const(8)
+_EV_RX = const(1)
+_EV_STATUS = const(20)
+_EV_TX_DONE = const(2)
+_EV_TX_FAILED = const(4)
+_EXPIRED = const(6)
+_FAILED = const(8)
+_QUEUED = const(1)
+_TRANSMITTED = const(4)
+_TRANSMITTING = const(2)
+_UNAVAILABLE = const(2)
+_WAITING = const(3)
 
 BROADCAST = "*"  # destination name meaning every node on the link
 _MAX_PENDING_ACKS = const(4)
@@ -167,14 +168,14 @@ class Link(Ranging):
     def advertise_caps(self):
         c = self.caps
         self._caps = c
-        self._emit((EV_CAPS, self, c))
+        self._emit((_EV_CAPS, self, c))
         return c
 
     def _check_caps_changed(self):
         c = self.caps
         if self._caps is not None and c != self._caps:
             self._caps = c
-            self._emit((EV_CAPS, self, c))
+            self._emit((_EV_CAPS, self, c))
 
     # -- helpers ----------------------------------------------------------------
     def _emit(self, ev):
@@ -182,7 +183,7 @@ class Link(Ranging):
             self.listener(ev)
 
     def _status(self, req_id, status, reason=""):
-        self._emit((EV_STATUS, self, req_id, status, reason))
+        self._emit((_EV_STATUS, self, req_id, status, reason))
 
     def _final(self, req, status, reason=""):
         # The single exit for accepted requests.
@@ -191,7 +192,7 @@ class Link(Ranging):
         self._status(req.req_id, status, reason)
 
     def _refuse(self, req_id, reason):
-        self._status(req_id, FAILED, reason)
+        self._status(req_id, _FAILED, reason)
         return False
 
     def mtu_for(self, dst_id):
@@ -252,9 +253,9 @@ class Link(Ranging):
         if out is req:
             return self._refuse(req.req_id, "transmit queue full of higher-priority requests")
         self._active[req.req_id] = req
-        self._status(req.req_id, QUEUED)
+        self._status(req.req_id, _QUEUED)
         if out is not None:
-            self._final(out, FAILED, "evicted from a full queue by a higher-priority request")
+            self._final(out, _FAILED, "evicted from a full queue by a higher-priority request")
         return True
 
     # -- the modem's automatic reply ----------------------------------------------
@@ -275,19 +276,19 @@ class Link(Ranging):
     def cancel(self, now, req_id, reason="canceled"):
         req = self.queue.cancel(req_id)
         if req is not None:
-            self._final(req, CANCELED, reason)
+            self._final(req, _CANCELED, reason)
             return True
         fl = self._fl
         if fl.req is not None and fl.req.req_id == req_id and not fl.canceled:
             # The bytes may already be on the air; we stop caring about them.
             fl.canceled = True
-            self._final(fl.req, CANCELED, reason)
+            self._final(fl.req, _CANCELED, reason)
             if fl.state == _IDLE:  # a ranging job between pings
                 fl.clear()
             return True
         req = self._acks.by_req_id(req_id)
         if req is not None:
-            self._final(req, CANCELED, reason)  # a late ack will match nothing
+            self._final(req, _CANCELED, reason)  # a late ack will match nothing
             return True
         return False
 
@@ -299,8 +300,8 @@ class Link(Ranging):
     def _heard(self, nid, now, period_ms=None):
         if nid is None or nid == self.node_id:
             return
-        if self.discovery.heard(nid, now, period_ms) == AVAILABLE:
-            self._emit((EV_AVAILABILITY, self, self.names.learn(nid), AVAILABLE))
+        if self.discovery.heard(nid, now, period_ms) == _AVAILABLE:
+            self._emit((_EV_AVAILABILITY, self, self.names.learn(nid), _AVAILABLE))
 
     # -- time ---------------------------------------------------------------------
     def poll(self, now):
@@ -308,15 +309,15 @@ class Link(Ranging):
         d.poll(now)
         self._handle_driver_events(now)
         for nid in self.discovery.poll(now):
-            self._emit((EV_AVAILABILITY, self, self.names.name_of(nid), UNAVAILABLE))
+            self._emit((_EV_AVAILABILITY, self, self.names.name_of(nid), _UNAVAILABLE))
         fl = self._fl
         for req, expired in self._acks.due(now):
             if expired:
-                self._final(req, EXPIRED, "lifespan ended before delivery was confirmed")
+                self._final(req, _EXPIRED, "lifespan ended before delivery was confirmed")
             else:
                 self._retry_or_fail(req, now, "no acknowledgement")
         for req in self.queue.expire(now):
-            self._final(req, EXPIRED, "lifespan ended in the queue")
+            self._final(req, _EXPIRED, "lifespan ended in the queue")
         if fl.state == _IDLE and fl.kind == 3 and fl.req is not None:
             # a ranging job between two pings
             if ticks_diff(now, fl.req.deadline) >= 0:
@@ -351,13 +352,13 @@ class Link(Ranging):
             self.stats["retries"] += 1
             out = self.queue.push(req, now)
             if out is req:
-                self._final(req, FAILED, reason + "; queue full for the retry")
+                self._final(req, _FAILED, reason + "; queue full for the retry")
             else:
-                self._status(req.req_id, QUEUED, reason + "; retrying")
+                self._status(req.req_id, _QUEUED, reason + "; retrying")
                 if out is not None:
-                    self._final(out, FAILED, "evicted from a full queue by a higher-priority request")
+                    self._final(out, _FAILED, "evicted from a full queue by a higher-priority request")
         else:
-            self._final(req, FAILED, reason)
+            self._final(req, _FAILED, reason)
 
     # -- transmission -------------------------------------------------------------
     def _next_seq(self, dst_id=None):
@@ -430,7 +431,7 @@ class Link(Ranging):
             fl.handle = d.send(now, addr, data, want_ack and self.modem_acks)
         except AcommError as e:
             fl.clear()
-            self._final(req, FAILED, "driver refused the frame: %s" % e)
+            self._final(req, _FAILED, "driver refused the frame: %s" % e)
             return
         fl.kind = 0
         fl.seq = seq
@@ -438,26 +439,26 @@ class Link(Ranging):
         fl.state = _SENDING
         self._last_tx = now
         self.stats["tx_frames"] += 1
-        self._status(req.req_id, TRANSMITTING)
+        self._status(req.req_id, _TRANSMITTING)
 
     # -- events from the driver ---------------------------------------------------
     def _handle_driver_events(self, now):
         for ev in self.driver.take_events():
             code = ev[0]
-            if code == EV_RX:
+            if code == _EV_RX:
                 self._on_rx(now, ev[1], ev[2], ev[3])
-            elif code == EV_TX_DONE:
+            elif code == _EV_TX_DONE:
                 self._on_tx_done(now, ev[1])
-            elif code == EV_DELIVERED:
+            elif code == _EV_DELIVERED:
                 self._on_delivered(now, ev[1])
-            elif code == EV_TX_FAILED:
+            elif code == _EV_TX_FAILED:
                 self._on_tx_failed(now, ev[1], ev[2])
-            elif code == EV_RANGE:
+            elif code == _EV_RANGE:
                 if self._fl.kind == 3 and ev[1] == self._fl.handle:
                     self._range_result(now, ev[3])
-            elif code == EV_DRIVER_UP or code == EV_DRIVER_DOWN:
+            elif code == _EV_DRIVER_UP or code == _EV_DRIVER_DOWN:
                 self._check_caps_changed()
-            elif code == EV_REPLIED:
+            elif code == _EV_REPLIED:
                 # our reply went out: everyone around heard us, so the
                 # advert can wait (a CADDY diver never sends otherwise)
                 self._last_tx = now
@@ -477,9 +478,9 @@ class Link(Ranging):
         if req.meta[0] >= 0:
             # the channel is free again: wait for the ack off the air
             self._acks.add(req, handle, req.dst, req.meta[1], ticks_add(now, self.ack_timeout_ms))
-            self._status(req.req_id, WAITING)
+            self._status(req.req_id, _WAITING)
         else:
-            self._final(req, TRANSMITTED)
+            self._final(req, _TRANSMITTED)
 
     def _on_delivered(self, now, handle):
         fl = self._fl
@@ -487,11 +488,11 @@ class Link(Ranging):
             if not fl.canceled:
                 # confirmed before the end of transmission was reported
                 fl.canceled = True
-                self._final(fl.req, DELIVERED)
+                self._final(fl.req, _DELIVERED)
             return
         req = self._acks.by_handle(handle)
         if req is not None:
-            self._final(req, DELIVERED)
+            self._final(req, _DELIVERED)
 
     def _on_tx_failed(self, now, handle, reason):
         fl = self._fl
@@ -538,7 +539,7 @@ class Link(Ranging):
         if f.ftype == fr.SEGMENT:
             # the transport's: it numbers and acknowledges its own fragments
             if mine:
-                self._emit((EV_SEGMENT, self, src, dst, f.seq, f.payload, f.authed))
+                self._emit((_EV_SEGMENT, self, src, dst, f.seq, f.payload, f.authed))
             return
         data = f.ftype == fr.DATA or f.ftype == fr.REPLY
         if not mine:
@@ -551,11 +552,11 @@ class Link(Ranging):
                 # the ack beat our own end-of-transmission estimate: the
                 # request is done; the slot frees at EV_TX_DONE
                 fl.canceled = True
-                self._final(fl.req, DELIVERED)
+                self._final(fl.req, _DELIVERED)
                 return
             req = self._acks.by_ack(src, f.seq)
             if req is not None:
-                self._final(req, DELIVERED)
+                self._final(req, _DELIVERED)
             return
         if not data:
             return
@@ -573,11 +574,11 @@ class Link(Ranging):
             return
         if self.guard is not None and not self.guard.admits(f.payload, f.authed, self.framing.auth):
             self.stats["refused"] += 1
-            self._emit((EV_REFUSED, self, self.names.name_of(src), self.guard.REFUSED))
+            self._emit((_EV_REFUSED, self, self.names.name_of(src), self.guard.REFUSED))
             return
         self._emit(
             (
-                EV_RECEIVED,
+                _EV_RECEIVED,
                 self,
                 self.names.name_of(src),
                 BROADCAST if dst is None else self.names.name_of(dst),

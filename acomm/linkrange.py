@@ -9,8 +9,14 @@
 from .caps import CAP_RANGING
 from .compat import const, ticks_add, ticks_diff
 from .errors import AcommError
-from .events import DELIVERED, EV_RANGE_RECEIVED, FAILED, TRANSMITTING
 from .txqueue import TxRequest
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_DELIVERED = const(5)
+_EV_RANGE_RECEIVED = const(24)
+_FAILED = const(8)
+_TRANSMITTING = const(2)
 
 SLOT_IDLE = const(0)
 SLOT_SENDING = const(1)  # a frame or ping is on the air
@@ -50,7 +56,7 @@ class Ranging:
         fl.kind = 3
         fl.state = SLOT_SENDING
         if idx[0] == 0:
-            self._status(req.req_id, TRANSMITTING)
+            self._status(req.req_id, _TRANSMITTING)
         self._last_tx = now
         try:
             fl.handle = self.driver.ping(now, self.addr_map.addr_of(nid))
@@ -80,13 +86,13 @@ class Ranging:
         ids, results, _ = req.meta[1]
         self._fl.clear()
         names = [self.names.name_of(i) for i in ids]
-        self._emit((EV_RANGE_RECEIVED, self, req.req_id, names, results))
+        self._emit((_EV_RANGE_RECEIVED, self, req.req_id, names, results))
         got = 0
         for r in results:
             if r is not None:
                 got += 1
         if got:
-            self._final(req, DELIVERED, "%d of %d ranges" % (got, len(ids)))
+            self._final(req, _DELIVERED, "%d of %d ranges" % (got, len(ids)))
         else:
-            self._final(req, FAILED, "no range reply")
+            self._final(req, _FAILED, "no range reply")
 

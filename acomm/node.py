@@ -12,9 +12,14 @@
 # and the node calls it before and after each poll of the link.
 
 from .compat import const, ticks_ms
-from .events import EV_SEGMENT, EV_STATUS, is_final
+from .events import is_final
 from .link import Link
 from .names import NameTable
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_EV_SEGMENT = const(25)
+_EV_STATUS = const(20)
 
 _READ_CHUNK = const(256)
 _EVENT_BACKLOG = const(64)
@@ -86,10 +91,10 @@ class Node:
         t = self.transport
         if t is not None:
             code = ev[0]
-            if code == EV_SEGMENT:
+            if code == _EV_SEGMENT:
                 t.on_segment(self._now, ev[1], ev[2], ev[3], ev[4], ev[5], ev[6])
                 return
-            if code == EV_STATUS and t.on_link_status(self._now, ev[2], ev[3], ev[4]):
+            if code == _EV_STATUS and t.on_link_status(self._now, ev[2], ev[3], ev[4]):
                 return
         if self.listener is not None:
             self.listener(ev)
@@ -189,6 +194,6 @@ def final_statuses(events):
     # statuses among events.
     out = {}
     for ev in events:
-        if ev[0] == EV_STATUS and is_final(ev[3]):
+        if ev[0] == _EV_STATUS and is_final(ev[3]):
             out[ev[2]] = ev[3]
     return out

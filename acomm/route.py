@@ -20,8 +20,12 @@
 # So a nearby node is reached acoustically, for free, and Iridium carries
 # the packet when the acoustic path is gone.
 
-from .compat import ticks_diff
-from .events import AVAILABLE, UNAVAILABLE
+from .compat import const, ticks_diff
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_AVAILABLE = const(1)
+_UNAVAILABLE = const(2)
 
 MEDIUM_ANY = "any"
 MEDIUM_ALL = "all"
@@ -55,7 +59,7 @@ class Router:
 
     def _reach(self, link, hop):
         st = link.discovery.state(hop)
-        if st == UNAVAILABLE:
+        if st == _UNAVAILABLE:
             return None
         since = self._stalled.get((link.name, hop))
         if since is not None:
@@ -63,7 +67,7 @@ class Router:
             if heard is None or ticks_diff(heard, since) <= 0:
                 return 1, 1
             del self._stalled[(link.name, hop)]
-        return 0, 0 if st == AVAILABLE else 1
+        return 0, 0 if st == _AVAILABLE else 1
 
     def choose(self, final, size, priority, medium):
         # -> (link, next hop id), or None while no allowed link can reach it

@@ -33,11 +33,19 @@ from . import segment as sg
 from .arq import Outgoing
 from .compat import const, ticks_add, ticks_diff
 from .errors import AcommError, StoreFull
-from .events import DELIVERED, EV_PACKET_STATUS, EXPIRED, FAILED, QUEUED, TRANSMITTED
 from .frame import SEGMENT
 from .packetstore import DONE_MEMORY, MemoryStore, PacketStore
 from .route import MEDIUM_ALL, Router
 from .transport_rx import Receiving
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_DELIVERED = const(5)
+_EV_PACKET_STATUS = const(26)
+_EXPIRED = const(6)
+_FAILED = const(8)
+_QUEUED = const(1)
+_TRANSMITTED = const(4)
 
 _PIPELINE = const(3)  # fragments of one transfer in a link queue at a time
 _STALL_POLLS = const(3)  # unanswered polls in a row before trying another link
@@ -110,9 +118,9 @@ class Transport(Receiving):
         self.stats["sent"] += 1
         if not self._keep(p):
             self.stats["failed"] += 1
-            self._emit((EV_PACKET_STATUS, p.pid, FAILED, "store full"))
+            self._emit((_EV_PACKET_STATUS, p.pid, _FAILED, "store full"))
             return p.pid
-        self._status(p, QUEUED, "")
+        self._status(p, _QUEUED, "")
         return p.pid
 
     def pending(self):
@@ -190,12 +198,12 @@ class Transport(Receiving):
 
     def _status(self, p, status, reason):
         if not p.relayed:
-            self._emit((EV_PACKET_STATUS, p.pid, status, reason))
+            self._emit((_EV_PACKET_STATUS, p.pid, status, reason))
 
     def _final(self, now, p, status, reason=""):
         group = p.group
         if group is not None:
-            if status == FAILED and len(group) > 1:
+            if status == _FAILED and len(group) > 1:
                 group.remove(p)  # the other copies may still make it
                 self._drop(now, p)
                 return
@@ -204,7 +212,7 @@ class Transport(Receiving):
         else:
             self._drop(now, p)
         self.packets.delete(p)
-        name = {DELIVERED: "delivered", TRANSMITTED: "delivered", EXPIRED: "expired", FAILED: "failed"}[status]
+        name = {_DELIVERED: "delivered", _TRANSMITTED: "delivered", _EXPIRED: "expired", _FAILED: "failed"}[status]
         self.stats[name] += 1
         self._status(p, status, reason)
 
@@ -256,12 +264,12 @@ class Transport(Receiving):
             # the body stays in the store; fragments are read as they go
             blob = self.packets.blob(p.key, head)
             if blob is None or len(blob) != len(head) + p.size:
-                self._final(now, p, FAILED, "lost from the store")
+                self._final(now, p, _FAILED, "lost from the store")
                 return
         try:
             p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
         except ValueError as e:
-            self._final(now, p, FAILED, str(e))
+            self._final(now, p, _FAILED, str(e))
             return
         lanes[lane] = p
         p.link, p.hop = link, hop
@@ -277,7 +285,7 @@ class Transport(Receiving):
             if p not in self._out:
                 continue  # a copy that went with its group
             if wall >= p.expiry:
-                self._final(now, p, EXPIRED, "lifespan over")
+                self._final(now, p, _EXPIRED, "lifespan over")
             elif p.out is None:
                 self._start(p, now)
         # a link with a poll out waits for the SACK: a half-duplex modem
@@ -330,7 +338,7 @@ class Transport(Receiving):
     def _request(self, p, now, nf):
         index, head, data = nf
         if data is None:
-            self._final(now, p, FAILED, "lost from the store")
+            self._final(now, p, _FAILED, "lost from the store")
             return
         rid = self.node.next_req_id()
         life = p.expiry - self.wall()
@@ -351,7 +359,7 @@ class Transport(Receiving):
         r = self._reqs.get(rid)
         if r is None:
             return False
-        if status < TRANSMITTED:
+        if status < _TRANSMITTED:
             return True
         del self._reqs[rid]
         p, index, poll = r
@@ -361,7 +369,7 @@ class Transport(Receiving):
         if poll:
             p.polling -= 1
         if p.out is not None and poll:
-            if status == TRANSMITTED:
+            if status == _TRANSMITTED:
                 p.polled = now
                 p.timer = ticks_add(now, self._sack_timeout(p))
             else:
@@ -428,8 +436,8 @@ class Transport(Receiving):
                 self._abandon(now, p)
                 p.wait = ticks_add(now, _FULL_WAIT_MS)
             else:
-                self._final(now, p, FAILED, "refused: %s" % sg.refuse_name(o.refused))
+                self._final(now, p, _FAILED, "refused: %s" % sg.refuse_name(o.refused))
         elif o.complete:
-            self._final(now, p, TRANSMITTED if p.final != src else DELIVERED, "")
+            self._final(now, p, _TRANSMITTED if p.final != src else _DELIVERED, "")
         else:
             o.new_round()

@@ -14,9 +14,15 @@ from . import segment as sg
 from .arq import Reassembly
 from .compat import const, ticks_diff
 from .errors import DecodeError, StoreFull
-from .events import EV_PACKET, EV_REFUSED, FAILED, TRANSMITTED
 from .frame import SEGMENT
 from .packetstore import DONE_MEMORY
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_EV_PACKET = const(27)
+_EV_REFUSED = const(28)
+_FAILED = const(8)
+_TRANSMITTED = const(4)
 
 _SACK_PRIORITY = const(2)
 _RX_TIMEOUT_MS = const(600000)
@@ -155,10 +161,10 @@ class Receiving:
             g = self.node.guard
             if g is not None and not g.admits(data, not r.unauthed, self.node.auth):
                 self.stats["refused_unauthed"] += 1
-                self._emit((EV_REFUSED, None, names.name_of(origin), g.REFUSED))
+                self._emit((_EV_REFUSED, None, names.name_of(origin), g.REFUSED))
             else:
                 self.stats["received"] += 1
-                self._emit((EV_PACKET, names.name_of(origin), names.name_of(final), data))
+                self._emit((_EV_PACKET, names.name_of(origin), names.name_of(final), data))
             # saved after the application has it: a power cut in between
             # gives at worst a second delivery, never a packet acknowledged
             # that nobody saw
@@ -200,11 +206,11 @@ class Receiving:
         sk = self._sacks.get(rid)
         if sk is None:
             return False
-        if status >= TRANSMITTED:
+        if status >= _TRANSMITTED:
             del self._sacks[rid]
             # a modem that refused it (busy acknowledging the fragment it
             # just received) gets it again, twice at most
-            if status == FAILED and sk[3] < 2:
+            if status == _FAILED and sk[3] < 2:
                 self._sack(now, sk[0], sk[1], sk[2], sk[3] + 1)
         return True
 

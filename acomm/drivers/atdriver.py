@@ -23,9 +23,13 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP
 from .atcommand import R_OK, R_TIMEOUT, AtChannel
 from .slotbase import IDLE, S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_EV_DRIVER_DOWN = const(7)
+_EV_DRIVER_UP = const(6)
 
 T_CONFIG = const(1)
 T_CSQ = const(2)
@@ -157,7 +161,7 @@ class AtDriver(SlotDriver):
         self._fails += 1
         if self._fails >= self.down_after and not self.down_reported:
             self.down_reported = True
-            self._events.append((EV_DRIVER_DOWN, reason))
+            self._events.append((_EV_DRIVER_DOWN, reason))
         self._step = 0
         self._wait = ticks_add(now, self.retry_ms)
 
@@ -175,7 +179,7 @@ class AtDriver(SlotDriver):
         ok = self.signal_ok
         if self._signal_said != ok:
             self._signal_said = ok
-            self._events.append((EV_DRIVER_UP,) if ok else (EV_DRIVER_DOWN, "no signal"))
+            self._events.append((_EV_DRIVER_UP,) if ok else (_EV_DRIVER_DOWN, "no signal"))
         if not ok:
             self._csq_at = ticks_add(now, self.csq_retry_ms)
 

@@ -31,11 +31,16 @@
 from ..caps import Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, EncodeError
-from ..events import EV_RX, EV_TX_DONE, EV_TX_FAILED
 from . import iridium_wire as w
 from .atcommand import R_END, R_OK, R_TIMEOUT
 from .atdriver import AtDriver
 from .slotbase import IDLE, QUEUED
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_EV_RX = const(1)
+_EV_TX_DONE = const(2)
+_EV_TX_FAILED = const(4)
 
 # slot states after slotbase's IDLE and QUEUED
 WRITING = const(2)
@@ -247,7 +252,7 @@ class IridiumDriver(AtDriver):
             self._rb_good = True
             if n:
                 self.stats["mt_received"] += 1
-                self._events.append((EV_RX, None, None, bytes(buf[:n])))
+                self._events.append((_EV_RX, None, None, bytes(buf[:n])))
 
     def _result(self, now, tag, code, line):
         if tag == T_WB:
@@ -330,7 +335,7 @@ class IridiumDriver(AtDriver):
                 if mo_session:
                     s.state = IDLE
                     self.stats["mo_sent"] += 1
-                    self._events.append((EV_TX_DONE, s.handle))
+                    self._events.append((_EV_TX_DONE, s.handle))
                 return
             why = "MO status %d: %s" % (r[0], w.mo_status_name(r[0]))
         self.stats["sessions_failed"] += 1
@@ -356,7 +361,7 @@ class IridiumDriver(AtDriver):
         s = self.slot
         s.state = IDLE
         self.stats["mo_failed"] += 1
-        self._events.append((EV_TX_FAILED, s.handle, why))
+        self._events.append((_EV_TX_FAILED, s.handle, why))
 
     def _urc(self, now, line):
         if line == b"SBDRING":

@@ -17,13 +17,17 @@
 # without a transmission of its own (seed 003 section 6).
 
 from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
-from ..compat import ticks_add, ticks_diff
+from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_REPLIED, EV_RX
 from . import seatrac_wire as w
 from .seatrac_config import SeatracConfig
 from .seatrac_slot import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot
 from .slotbase import S_CONFIG, S_UP, SlotDriver
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_EV_REPLIED = const(8)
+_EV_RX = const(1)
 
 
 # answers to commands (ours, late, or someone else's on the line)
@@ -394,14 +398,14 @@ class SeatracDriver(SlotDriver):
         if src == 0 or src > 15:  # 0 is "unknown" as a source
             self.stats["malformed"] += 1
             return
-        self._events.append((EV_RX, src, dest, bytes(b[k + 2 : k + 2 + plen])))
+        self._events.append((_EV_RX, src, dest, bytes(b[k + 2 : k + 2 + plen])))
         if not ack and b[4] in REQ_TYPES and own is not None and dest == own:
             self._answering(now)
             q = self._q_want
             if q is not None and q[0] in (w.BEACON_ALL, src) and self.queued_reply is not None:
                 # the beacon's reply took the packet
                 self._q_want = self.queued_reply = None
-                self._events.append((EV_REPLIED,))
+                self._events.append((_EV_REPLIED,))
 
     def _ping_resp(self, b, n):
         if w.fix_len(b, 1, n) < 0:

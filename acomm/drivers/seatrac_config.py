@@ -13,9 +13,12 @@
 # the beacon id are parameters, and a record of another length is never
 # written back: the driver then trusts the configured id without checking.
 
-from ..compat import ticks_add, ticks_diff
-from ..events import EV_DRIVER_DOWN
+from ..compat import const, ticks_add, ticks_diff
 from . import seatrac_wire as w
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_EV_DRIVER_DOWN = const(7)
 
 _MODELS = {w.PART_X150: "X150", w.PART_X110: "X110"}
 
@@ -69,7 +72,7 @@ class SeatracConfig:
         self.fails += 1
         if self.fails >= self.d.down_after and not self.down_reported:
             self.down_reported = True
-            self.d._events.append((EV_DRIVER_DOWN, reason))
+            self.d._events.append((_EV_DRIVER_DOWN, reason))
         self._next = w.CID_SYS_INFO
         self._wait = ticks_add(now, self.retry_ms)
 

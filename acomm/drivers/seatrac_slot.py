@@ -11,9 +11,15 @@
 #           beacon's DAT_ERROR / PING_ERROR, or our own watchdog.
 
 from ..compat import const, ticks_add, ticks_diff
-from ..events import EV_DELIVERED, EV_RANGE, EV_TX_DONE, EV_TX_FAILED
 from . import seatrac_wire as w
 from .slotbase import IDLE, QUEUED, SlotBase  # noqa: F401 (QUEUED: for the driver)
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_EV_DELIVERED = const(3)
+_EV_RANGE = const(5)
+_EV_TX_DONE = const(2)
+_EV_TX_FAILED = const(4)
 
 CMD = const(2)
 AIR = const(3)
@@ -92,17 +98,17 @@ class AcousticSlot(SlotBase):
     def tx_done(self):
         if self.done_at is not None:
             self.done_at = None
-            self.d._events.append((EV_TX_DONE, self.handle))
+            self.d._events.append((_EV_TX_DONE, self.handle))
 
     def fail(self, reason):
         self.state = IDLE
         self.done_at = None
-        self.d._events.append((EV_TX_FAILED, self.handle, reason))
+        self.d._events.append((_EV_TX_FAILED, self.handle, reason))
 
     def delivered(self):
         self.tx_done()
         self.state = IDLE
-        self.d._events.append((EV_DELIVERED, self.handle))
+        self.d._events.append((_EV_DELIVERED, self.handle))
 
     def dat_error(self, status):
         self.tx_done()  # the packet did go out; nobody answered it
@@ -110,4 +116,4 @@ class AcousticSlot(SlotBase):
 
     def ranged(self, src, metres, fix):
         self.state = IDLE
-        self.d._events.append((EV_RANGE, self.handle, src if metres is not None else None, metres, fix))
+        self.d._events.append((_EV_RANGE, self.handle, src if metres is not None else None, metres, fix))

@@ -6,8 +6,13 @@
 # own states (after QUEUED) and how the transaction goes on its wire.
 
 from ..compat import const
-from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_TX_FAILED
 from .base import SansIO
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_EV_DRIVER_DOWN = const(7)
+_EV_DRIVER_UP = const(6)
+_EV_TX_FAILED = const(4)
 
 # the driver's own state
 S_START = const(0)  # created: the first poll() starts the configuration
@@ -40,13 +45,13 @@ class SlotDriver(SansIO):
     def _went_up(self):
         # the configuration is done
         self._state = S_UP
-        self._events.append((EV_DRIVER_UP,))
+        self._events.append((_EV_DRIVER_UP,))
 
     def _went_down(self, reason):
         # Only a driver that was up says it is down, and the configuration
         # remembers that it did, so that its retries do not say so again.
         if self._state == S_UP:
-            self._events.append((EV_DRIVER_DOWN, reason))
+            self._events.append((_EV_DRIVER_DOWN, reason))
             self.config.down_reported = True
 
     def _handle(self):
@@ -57,7 +62,7 @@ class SlotDriver(SansIO):
         # ping() never raises (the link calls it without a guard): a problem
         # comes back as EV_TX_FAILED for a handle of its own
         h = self._handle()
-        self._events.append((EV_TX_FAILED, h, reason))
+        self._events.append((_EV_TX_FAILED, h, reason))
         return h
 
     def _accept(self, now, kind, addr, *rest):

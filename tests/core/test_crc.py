@@ -34,9 +34,22 @@ def test_fast_matches_pure_on_all_kinds_of_buffer():
 
 def test_imc_table_entry():
     # ref/imc.md: reflected table, entry [1] = 0xC0C1
-    from acomm.crc import TABLE
+    from acomm.crc import _TABLE_LE
 
-    assert TABLE[1] == 0xC0C1
+    assert _TABLE_LE[2] | _TABLE_LE[3] << 8 == 0xC0C1
+
+
+def test_the_written_out_table_is_the_polynomials():
+    # the table is a constant in the source (it stays in a board's flash):
+    # every entry must be what polynomial 0xA001 gives
+    from acomm.crc import _TABLE_LE
+
+    assert len(_TABLE_LE) == 512
+    for i in range(256):
+        c = i
+        for _ in range(8):
+            c = (c >> 1) ^ 0xA001 if c & 1 else c >> 1
+        assert _TABLE_LE[2 * i] | _TABLE_LE[2 * i + 1] << 8 == c, i
 
 
 def test_nmea_xor():
