@@ -10,6 +10,9 @@
 #   cm3-full.elf    every module of acomm and acomm_mp frozen, and the
 #                   footprint harness (tools/lockstep/): the core suite and
 #                   the frozen heap figures run on it
+#   cm3-harness.elf cm3-plain with only the footprint harness frozen: the
+#                   ROMFS and .mpy heap figures run the buoy's files on it,
+#                   so that they count the buoy and not the harness
 #   micropython-i386  the unix port built for i386 (-m32), full manifest
 #   mpy-cross       the matching cross compiler
 #
@@ -59,6 +62,7 @@ PRODUCTS = {
     "cm3-plain": ("qemu", ("boot", "asyncio")),
     "cm3-buoy": ("qemu", ("boot", "board:buoy_pico")),
     "cm3-full": ("qemu", ("boot", "full", "harness")),
+    "cm3-harness": ("qemu", ("boot", "asyncio", "harness")),
     "micropython-i386": ("unix", ("full", "harness")),
 }
 

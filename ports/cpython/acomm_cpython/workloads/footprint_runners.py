@@ -128,7 +128,7 @@ def _read_until(ser, ends, limit_s):
 def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LIMIT_S, store=None):
     """One buoy minute on the qemu Cortex-M3 board with a GC heap of `heap` bytes.
 
-    The harness (frozen as acomm_lockstep, or from /rom or /lib as .mpy) is
+    The harness (frozen as acomm_lockstep in elf) is
     started through the raw REPL and speaks the lockstep protocol on the
     UART. rom: a ROMFS image (mounted at /rom); flash: a littlefs image of
     the board's filesystem (the .mpy files under /lib); store: the contents
@@ -202,14 +202,16 @@ def run_i386(heap, mode="frozen", lib=None, rom=None, seed=1, info=False, limit_
     env = dict(os.environ)
     call = "acomm_lockstep.main(%r, %r, None, %r)" % (os.path.join(tmp, "config.py"), os.path.join(tmp, "store"), bool(info))
     size = heap
+    # the harness is frozen in the build; in the other modes acomm comes
+    # from the files, which stand before .frozen on the path
     if mode == "frozen":
         env["MICROPYPATH"] = ".frozen"
         code = "import acomm_lockstep\n" + call
     elif mode == "mpy":
-        env["MICROPYPATH"] = lib  # no .frozen: acomm comes from the files
+        env["MICROPYPATH"] = lib + ":.frozen"
         code = "import acomm_lockstep\n" + call
     else:
-        env["MICROPYPATH"] = tmp
+        env["MICROPYPATH"] = tmp + ":.frozen"
         n = os.path.getsize(rom)
         # 16-byte blocks, 3 bits of tables each; 64 bytes of alignment
         size = heap + n + n * 3 // 128 + 64
@@ -254,16 +256,15 @@ def run_i386(heap, mode="frozen", lib=None, rom=None, seed=1, info=False, limit_
 
 
 class Staged:
-    # the board's modules compiled for an arch, the harness's .mpy beside
-    # them, a ROMFS image of the lot and a littlefs image with them under
-    # /lib: built once per bench run
+    # the board's modules compiled for an arch, a ROMFS image of them and a
+    # littlefs image with them under /lib: built once per bench run. The
+    # harness is not among them: the boards run it frozen (cm3-harness, the
+    # i386 build's .frozen), so the figures count the buoy's files alone.
     def __init__(self, tmp, arch):
         self.tmp, self.arch = tmp, arch
         self.lib = os.path.join(tmp, arch, "lib")
         for e in boardfiles.plan(boardfiles.board_path(BOARD), arch=arch, stage_dir=os.path.join(tmp, arch)):
             pass
-        boardfiles.compile_mpy(os.path.join(boardfiles.repo_root(), "tools", "lockstep", "acomm_lockstep.py"),
-                               os.path.join(self.lib, "acomm_lockstep.mpy"), arch, "acomm_lockstep.py")
         self._rom = self._lfs = None
 
     def rom(self):
