@@ -13,35 +13,26 @@ MT_MAX = const(270)
 MO_SUCCESS_MAX = const(4)  # 3-4 are "reserved, success" (ISU reference, goby3, DUNE)
 
 # +SBDIX MO status -> what it means (ref 5.2, DUNE's table); others are
-# "reserved failure". (code, text) pairs: a constant tuple stays in flash
-# when frozen, a dict would be built on the heap.
-MO_STATUS = (
-    (0, "MO sent"),
-    (1, "MO sent, MT too big for the MT buffer"),
-    (2, "MO sent, location update not accepted"),
-    (3, "MO sent (reserved)"),
-    (4, "MO sent (reserved)"),
-    (10, "call did not complete in the allowed time"),
-    (11, "MO message queue at the gateway is full"),
-    (12, "MO message has too many segments"),
-    (13, "session did not complete"),
-    (14, "invalid segment size"),
-    (15, "access denied"),
-    (16, "transceiver locked"),
-    (17, "gateway not responding"),
-    (18, "RF drop"),
-    (19, "protocol error"),
-    (32, "no network service"),
-    (33, "antenna fault"),
-    (34, "radio disabled"),
-    (35, "transceiver busy"),
+# "reserved failure". "code:text" items in one constant string: one object
+# on a board's heap when the modules run from a ROMFS image, where a tuple
+# of (code, text) pairs took 20 tuples and their strings (frozen, either
+# stays in flash). Read only to explain a failed session.
+_MO_STATUS = (
+    "0:MO sent;1:MO sent, MT too big for the MT buffer;2:MO sent, location update not accepted;"
+    "3:MO sent (reserved);4:MO sent (reserved);10:call did not complete in the allowed time;"
+    "11:MO message queue at the gateway is full;12:MO message has too many segments;"
+    "13:session did not complete;14:invalid segment size;15:access denied;16:transceiver locked;"
+    "17:gateway not responding;18:RF drop;19:protocol error;32:no network service;33:antenna fault;"
+    "34:radio disabled;35:transceiver busy"
 )
 
 
 def mo_status_name(code):
-    for c, n in MO_STATUS:
-        if c == code:
-            return n
+    """What +SBDIX MO status `code` means."""
+    for item in _MO_STATUS.split(";"):
+        c, text = item.split(":", 1)
+        if int(c) == code:
+            return text
     return "reserved failure"
 
 

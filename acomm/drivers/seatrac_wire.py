@@ -56,35 +56,25 @@ CST_XCVR_STATE_REQ = const(0x3D)
 CST_XCVR_STATE_RX = const(0x3E)
 CST_XCVR_STATE_RESP = const(0x3F)
 
-# (code, name) pairs: a constant tuple stays in flash when frozen, a dict
-# would be built on the heap
+# "CODE NAME" pairs in one constant string: one object on a board's heap when
+# the modules run from a ROMFS image, where a tuple of pairs took 19 tuples
+# and their strings (frozen, either stays in flash). Read only to name an
+# error.
 _CST_NAMES = (
-    (0x00, "OK"),
-    (0x01, "FAIL"),
-    (0x03, "EEPROM_ERROR"),
-    (0x04, "CMD_PARAM_MISSING"),
-    (0x05, "CMD_PARAM_INVALID"),
-    (0x30, "XCVR_BUSY"),
-    (0x31, "XCVR_ID_REJECTED"),
-    (0x32, "XCVR_CSUM_ERROR"),
-    (0x33, "XCVR_LENGTH_ERROR"),
-    (0x34, "XCVR_RESP_TIMEOUT"),
-    (0x35, "XCVR_RESP_ERROR"),
-    (0x36, "XCVR_RESP_WRONG"),
-    (0x37, "XCVR_PLOAD_ERROR"),
-    (0x3A, "XCVR_STATE_STOPPED"),
-    (0x3B, "XCVR_STATE_IDLE"),
-    (0x3C, "XCVR_STATE_TX"),
-    (0x3D, "XCVR_STATE_REQ"),
-    (0x3E, "XCVR_STATE_RX"),
-    (0x3F, "XCVR_STATE_RESP"),
+    "00 OK 01 FAIL 03 EEPROM_ERROR 04 CMD_PARAM_MISSING 05 CMD_PARAM_INVALID 30 XCVR_BUSY 31 XCVR_ID_REJECTED "
+    "32 XCVR_CSUM_ERROR 33 XCVR_LENGTH_ERROR 34 XCVR_RESP_TIMEOUT 35 XCVR_RESP_ERROR 36 XCVR_RESP_WRONG "
+    "37 XCVR_PLOAD_ERROR 3A XCVR_STATE_STOPPED 3B XCVR_STATE_IDLE 3C XCVR_STATE_TX 3D XCVR_STATE_REQ "
+    "3E XCVR_STATE_RX 3F XCVR_STATE_RESP"
 )
 
 
 def status_name(code):
-    for c, n in _CST_NAMES:
-        if c == code:
-            return n
+    """The CST_E name of a status code, or CST_0xNN for one the table lacks."""
+    words = _CST_NAMES.split()
+    key = "%02X" % code
+    for i in range(0, len(words), 2):
+        if words[i] == key:
+            return words[i + 1]
     return "CST_0x%02X" % code
 
 
@@ -118,16 +108,20 @@ MAX_MSG = const(128)
 _HEX = b"0123456789ABCDEF"
 
 
-def _hex_values():
-    # 0..15 for '0'-'9' and 'A'-'F'; 0xFF for everything else: the protocol
-    # is uppercase only, so lowercase hex marks a damaged line.
-    t = bytearray(b"\xff" * 256)
-    for i in range(16):
-        t[_HEX[i]] = i
-    return t
-
-
-HEXVAL = _hex_values()
+# The value of each byte as an uppercase hex digit, 0..15; 0xFF for every
+# other byte: the protocol is uppercase only, so lowercase hex marks a
+# damaged line. A bytes constant, which stays in flash when frozen (a table
+# built at import took 272 B of a board's heap); test_name_tables checks it.
+HEXVAL = (
+    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\x00\x01\x02\x03\x04\x05\x06\x07\x08\x09\xff\xff\xff\xff\xff\xff"
+    b"\xff\x0a\x0b\x0c\x0d\x0e\x0f\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+)
 
 
 def encode_into(out, sync, msg, n):
