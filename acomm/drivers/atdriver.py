@@ -11,7 +11,9 @@
 # Start-up: each step is (command, wanted info prefix or None, timeout or
 # None). A step that fails (ERROR, timeout, missing info) starts the list
 # again after retry_ms; the driver says it is down once after down_after
-# failed rounds. After "ATE0" has been answered an echo of our own command
+# failed rounds. The steps up to the one that sets ATV1 take numeric result
+# codes too (a unit left in ATV0 answers "0"); "ATE0V1" (or "ATE0") turns
+# the echo off. After it has been answered an echo of our own command
 # means the modem restarted and lost its settings; so do banner lines.
 # down_after commands in a row without an answer make it restart too.
 #
@@ -101,7 +103,7 @@ class AtDriver(SlotDriver):
                 self._wait = None
             text, _, tmo = self.steps[self._step]
             self._step_seen = False
-            at.command(now, text, T_CONFIG, tmo or self.cmd_timeout_ms)
+            at.command(now, text, T_CONFIG, tmo or self.cmd_timeout_ms, numeric=not self._echo_off)
             return
         if self._work(now):
             return
@@ -139,7 +141,7 @@ class AtDriver(SlotDriver):
             what = "no reply" if code == R_TIMEOUT else (line.decode() if code != R_OK else "no %s" % want.decode())
             self._config_failed(now, "%s: %s" % (text.decode(), what))
             return
-        if text == b"ATE0":
+        if text.startswith(b"ATE0"):
             self._echo_off = True
         self._step += 1
         if self._step >= len(self.steps):
