@@ -11,9 +11,9 @@
 # Start-up: each step is (command, wanted info prefix or None, timeout or
 # None). A step that fails (ERROR, timeout, missing info) starts the list
 # again after retry_ms; the driver says it is down once after down_after
-# failed rounds. The steps up to the one that sets ATV1 take numeric result
-# codes too (a unit left in ATV0 answers "0"); "ATE0V1" (or "ATE0") turns
-# the echo off. After it has been answered an echo of our own command
+# failed rounds. The first step, "ATE0Q0V1", puts a unit left in any mode
+# (echo on, numeric results, quiet) into ours, and takes a numeric "0" as
+# its OK (a unit in ATV0 answers so); it turns the echo off. After it has been answered an echo of our own command
 # means the modem restarted and lost its settings; so do banner lines.
 # down_after commands in a row without an answer make it restart too.
 #
