@@ -1,4 +1,4 @@
-# The emulated Iridium 9602 and GSM modems as a simple host script sees
+# The emulated Iridium 9602, GSM and EvoLogics modems as a simple host script sees
 # them: a real pseudo-terminal opened with pyserial, the emulator at its
 # factory defaults (echo on, verbose results), and nothing but readline()
 # (and read_until for the prompts and blocks that end no line). This is how
@@ -112,5 +112,27 @@ def test_sms_send_and_read_from_a_readline_host(tmp_path):
         assert got[2:] == [b"to me\r\n", b"\r\n", b"OK\r\n"], got  # the text right under its header
         p.write(b"AT+CMGR=9\r")
         assert lines(p, 2)[1] == b"+CMS ERROR: 321\r\n"
+    finally:
+        r.close()
+
+
+def test_evologics_im_from_a_readline_host(tmp_path):
+    # the S2C in NET mode: no echo, every reply and notification a CR LF
+    # line; the IM exchange of the reference (section 2.6) read line by line
+    r = Running(tmp_path, "evologics", {"boot_ms": 0, "banner": ()})
+    p = r.port
+    try:
+        p.write(b"AT?MODE\n")
+        assert lines(p, 1) == [b"NET\r\n"]
+        p.write(b"AT@ZX1\n")
+        assert lines(p, 1) == [b"OK\r\n"]
+        p.write(b"AT*SENDIM,5,2,ack,hello\n")
+        got = lines(p, 4)
+        assert got[0] == b"OK\r\n" and got[1].startswith(b"SENDSTART,2,im,") and got[2].startswith(b"SENDEND,2,im,")
+        assert got[3] == b"DELIVEREDIM,2\r\n"
+        p.write(b"AT?T\n")
+        assert lines(p, 1) == [b"66667\r\n"]  # 100 m at 1500 m/s, in microseconds
+        p.write(b"AT?NOSUCH\n")
+        assert lines(p, 1) == [b"ERROR WRONG FORMAT\r\n"]
     finally:
         r.close()
