@@ -140,3 +140,39 @@ def test_sms_driver_comes_up_from_any_mode_and_receives():
         evs, t = run([e], [d], until)
         assert t is not None, (mode, evs, d.problem)
         assert (e.echo, e.verbose, e.quiet) == (False, True, False), mode
+
+
+def _garbage(rng, n):
+    # random bytes, with command-like pieces mixed in so that the parsers
+    # past the "AT" get their share
+    pieces = (b"AT", b"AT+", b"\r", b"\n", b"=", b"?", b",", b"\x1a", b"\x1b", b"+SBDWB=", b"+CMGS=", b"+CMGR=",
+              b"E", b"V", b"Q", b"0", b"1", b'"')
+    out = bytearray()
+    while len(out) < n:
+        if rng.chance(0.5):
+            out.extend(pieces[rng.below(len(pieces))])
+        else:
+            out.extend(rng.bytes(1 + rng.below(4)))
+    return bytes(out)
+
+
+def test_emulators_take_garbage_and_still_answer():
+    from acomm.prng import Prng
+
+    rng = Prng(22)
+    for make in (lambda m: IridiumEmulator(m, 1, boot_ms=0, session_ms=100, wb_timeout_ms=500),
+                 lambda m: GsmEmulator(m, 1, boot_ms=0, send_ms=100, data_timeout_ms=500)):
+        e = make(Medium())
+        t = 0
+        for _ in range(300):
+            e.feed(t, _garbage(rng, 1 + rng.below(40)))
+            e.poll(t)
+            e.take_output()
+            t += 20
+        # whatever state the garbage left: data phases and sessions time
+        # out, and a plain command line is answered again
+        e.poll(t + 60000)
+        e.take_output()
+        e.feed(t + 60000, b"\rATE1Q0V1\r")
+        assert e.take_output().endswith(b"\r\nOK\r\n")
+        assert said(e, t + 60000, b"AT+NOSUCH\r") == b"AT+NOSUCH\r\r\nERROR\r\n"
