@@ -1,4 +1,4 @@
-# The emulated Iridium 9602, GSM and EvoLogics modems as a simple host script sees
+# The emulated Iridium 9602, GSM, EvoLogics and Micro-Modem as a simple host script sees
 # them: a real pseudo-terminal opened with pyserial, the emulator at its
 # factory defaults (echo on, verbose results), and nothing but readline()
 # (and read_until for the prompts and blocks that end no line). This is how
@@ -134,5 +134,31 @@ def test_evologics_im_from_a_readline_host(tmp_path):
         assert lines(p, 1) == [b"66667\r\n"]  # 100 m at 1500 m/s, in microseconds
         p.write(b"AT?NOSUCH\n")
         assert lines(p, 1) == [b"ERROR WRONG FORMAT\r\n"]
+    finally:
+        r.close()
+
+
+def test_micromodem_rate0_from_a_host_that_waits_for_the_cycle_init(tmp_path):
+    # a host written for the real modem (pyacomms' states): after $CACYC at
+    # rate 0 it waits for the cycle init's $CATXF before it expects $CADRQ,
+    # and only then sends $CCTXD (issue 22: the emulator used to skip it,
+    # and such a host never sent its data)
+    from acomm.drivers import micromodem_nmea as nm
+
+    r = Running(tmp_path, "micromodem", {"air_scale": 0.1, "banner": False})
+    p = r.port
+    try:
+        p.write(nm.sentence("CCCYC", 0, 1, 2, 0, 1, 1))
+        seen = []
+        while not seen or not seen[-1].startswith(b"$CATXF"):
+            seen.append(lines(p, 1)[0])
+            assert not seen[-1].startswith(b"$CADRQ"), seen  # not before the cycle init
+        assert seen[0] == nm.sentence("CACYC", 0, 1, 2, 0, 1, 1), seen
+        drq = lines(p, 1)[0]
+        assert drq.startswith(b"$CADRQ,") and drq.split(b",")[5] == b"32", drq
+        p.write(nm.sentence("CCTXD", 1, 2, 1, nm.hexlify(b"fsk")))
+        got = [lines(p, 1)[0] for _ in range(4)]
+        assert got[:3] == [nm.sentence("CATXD", 1, 2, 1, 3), nm.sentence("CATXP", 3), nm.sentence("CATXF", 3)], got
+        assert got[3] == nm.sentence("CAACK", 1, 2, 1, 1)  # the headless peer acknowledged
     finally:
         r.close()
