@@ -26,6 +26,11 @@
 # channel stays quiet for settle_ms and drops what arrives then, so that a
 # late answer is not taken for the answer to the next command.
 # Buffers are preallocated; nothing is allocated per byte.
+# Framing: lines are cut at CR or at LF and empty ones skipped, so the
+# verbose form (CR LF text CR LF), the numeric form (text CR LF, result
+# "0" CR), a leading CR LF or none all read the same. A command written with
+# numeric=True also takes the numeric result codes "0" (OK) and "4"
+# (ERROR): the driver's first commands, before ATV1 has been answered.
 
 from ..compat import const, ticks_add, ticks_diff
 
@@ -65,6 +70,7 @@ class AtChannel:
         self._prompt = None
         self._ends = ()
         self._block_next = False
+        self._numeric = False
         self._mode = _LINES
         self._n = 0
         self._over = False
@@ -87,11 +93,13 @@ class AtChannel:
             self._quiet_until = None
         return False
 
-    def command(self, now, text, tag, timeout_ms, prompt=None, ends=(), block=False):
+    def command(self, now, text, tag, timeout_ms, prompt=None, ends=(), block=False, numeric=False):
         # Write one command (text without its line end). prompt: what opens
         # the data phase; ends: lines that end the command without OK;
-        # block: the answer is a binary block (SBDRB).
+        # block: the answer is a binary block (SBDRB); numeric: "0" / "4"
+        # are OK / ERROR too (a modem that may be in ATV0).
         self.tag = tag
+        self._numeric = numeric
         self._text = text
         self._deadline = ticks_add(now, timeout_ms)
         self._prompt = prompt
@@ -219,9 +227,9 @@ class AtChannel:
             else:
                 sink.on_stray(s)
             return
-        if s == b"OK":
+        if s == b"OK" or (self._numeric and s == b"0"):
             self._finish(R_OK, s)
-        elif is_final(s):
+        elif is_final(s) or (self._numeric and s == b"4"):
             self._finish(R_ERROR, s)
         elif s in self._ends:
             self._finish(R_END, s)

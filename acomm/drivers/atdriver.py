@@ -11,7 +11,9 @@
 # Start-up: each step is (command, wanted info prefix or None, timeout or
 # None). A step that fails (ERROR, timeout, missing info) starts the list
 # again after retry_ms; the driver says it is down once after down_after
-# failed rounds. After "ATE0" has been answered an echo of our own command
+# failed rounds. The first step, "ATE0Q0V1", puts a unit left in any mode
+# (echo on, numeric results, quiet) into ours, and takes a numeric "0" as
+# its OK (a unit in ATV0 answers so); it turns the echo off. After it has been answered an echo of our own command
 # means the modem restarted and lost its settings; so do banner lines.
 # down_after commands in a row without an answer make it restart too.
 #
@@ -105,7 +107,7 @@ class AtDriver(SlotDriver):
                 self._wait = None
             text, _, tmo = self.steps[self._step]
             self._step_seen = False
-            at.command(now, text, T_CONFIG, tmo or self.cmd_timeout_ms)
+            at.command(now, text, T_CONFIG, tmo or self.cmd_timeout_ms, numeric=not self._echo_off)
             return
         if self._work(now):
             return
@@ -143,7 +145,7 @@ class AtDriver(SlotDriver):
             what = "no reply" if code == R_TIMEOUT else (line.decode() if code != R_OK else "no %s" % want.decode())
             self._config_failed(now, "%s: %s" % (text.decode(), what))
             return
-        if text == b"ATE0":
+        if text.startswith(b"ATE0"):
             self._echo_off = True
         self._step += 1
         if self._step >= len(self.steps):

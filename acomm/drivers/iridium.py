@@ -90,7 +90,7 @@ class IridiumDriver(AtDriver):
             raise AcommError("SBD messages are at most 1960 bytes MO and 1890 MT")
         if len(mo_prefix) >= mo_mtu:
             raise AcommError("the MO prefix leaves no room for data")
-        steps = [(b"AT", None, None), (b"ATE0", None, None), (b"AT&K0", None, None)]
+        steps = [(b"ATE0Q0V1", None, None), (b"AT&K0", None, None)]
         if ring_alerts:
             steps.append((b"AT+SBDMTA=1", None, None))
         steps.append((b"AT+SBDD0", None, None))

@@ -4,7 +4,8 @@
 #
 # data frame (K_DATA), one frame per cycle:
 #   CYC   $CCCYC written; waiting for $CACYC (resent if unanswered)
-#   DRQ   $CACYC seen; waiting for the modem's $CADRQ
+#   DRQ   $CACYC seen; waiting for the modem's $CADRQ (at rate 0 the
+#         cycle-init mini-packet's $CATXP / $CATXF come first)
 #   TXD   $CCTXD written in answer; waiting for $CATXD
 #   AIR   the modem took the frame: $CATXF ends it (EV_TX_DONE); then,
 #         acknowledged sends only,
@@ -110,6 +111,15 @@ class AcousticSlot:
         # first of them that arrives puts the transaction on the air (the
         # ones before it may have been lost).
         st = self.state
+        if (st == CYC or st == DRQ) and self.kind == K_DATA:
+            # rate 0: the cycle-init mini-packet leaves before the modem
+            # asks for data; its $CATXF says the $CADRQ is near (and that
+            # the $CACYC came, should it have been lost)
+            d = self.d
+            d.cancel_command()
+            self.state = DRQ
+            self.deadline = ticks_add(now, d.air.mini_ms() + d.modem_wait_ms)
+            return True
         if st == TXD or st == MUC:
             d = self.d
             d.cancel_command()

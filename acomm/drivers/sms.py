@@ -69,7 +69,7 @@ class SmsDriver(AtDriver):
         read_capacity=16,
         banner_marks=(b"RDY", b"+CFUN:", b"SMS Ready", b"Call Ready"),
     ):
-        steps = [(b"AT", None, None), (b"ATE0", None, None), (b"AT+CMEE=1", None, None),
+        steps = [(b"ATE0Q0V1", None, None), (b"AT+CMEE=1", None, None),
                  (b"AT+CPIN?", b"+CPIN: READY", None), (b"AT+CMGF=%d" % (0 if pdu_mode else 1), None, None)]
         if not pdu_mode:
             steps.append((b'AT+CSCS="GSM"', None, None))

@@ -49,8 +49,9 @@ def rig(n=2, drv=None, emu=None, net=None):
 
 def up_fed(**opts):
     f = Fed(IridiumDriver(**opts))
-    assert f.poll() == b"AT\r"
-    for cmd in (b"ATE0\r", b"AT&K0\r", b"AT+SBDMTA=1\r", b"AT+SBDD0\r"):
+    # a unit in any mode (echo, numeric, quiet) comes out of this one in ours
+    assert f.poll() == b"ATE0Q0V1\r"
+    for cmd in (b"AT&K0\r", b"AT+SBDMTA=1\r", b"AT+SBDD0\r"):
         assert f.answer(b"OK\r\n") == cmd
     assert f.answer(b"0\r\nOK\r\n") == b"AT+CSQ\r"
     assert f.answer(b"+CSQ:4\r\nOK\r\n") == b""

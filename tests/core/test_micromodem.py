@@ -325,11 +325,13 @@ def test_emulator_errors_queries_and_timeouts():
     a.feed(0, nm.sentence("CCCFQ", "ALL"))
     assert a.take_output().count(b"$CACFG") == 5
     # the host leaves the data request unanswered
+    # (rate 0: the cycle-init mini-packet first, test_micromodem_rate0)
     a.feed(1000, nm.sentence("CCCYC", 0, 1, 2, 0, 0, 1))
-    assert a.take_output() == nm.sentence("CACYC", 0, 1, 2, 0, 0, 1) + nm.sentence("CADRQ", "120001", 1, 2, 0, 32, 1)
+    assert a.take_output() == nm.sentence("CACYC", 0, 1, 2, 0, 0, 1) + nm.sentence("CATXP", 0)
     a.feed(1010, CYC)
     assert a.take_output() == nm.sentence("CAERR", "120001", "CYC", 3, "BUSY")
-    assert run_emulators((a,), 1010, 4010)[0] == nm.sentence("CAERR", "120004", "DATA_TIMEOUT", 1, "no data from the host")
+    assert run_emulators((a,), 1010, 4710)[0] == nm.sentence("CATXF", 0) + nm.sentence(
+        "CADRQ", "120001", 1, 2, 0, 32, 1) + nm.sentence("CAERR", "120004", "DATA_TIMEOUT", 1, "no data from the host")
     # a standalone modem completes its own transmissions with nobody listening
     a.feed(5000, CYC)
     a.feed(5000, TXD)

@@ -77,9 +77,8 @@ def test_text_mode_coding_and_the_lines_of_the_modem():
 # -- byte-exact --------------------------------------------------------------------------------
 def up_fed(pdu_mode=True):
     f = Fed(SmsDriver(1, NUMBERS, pdu_mode=pdu_mode))
-    assert f.poll() == b"AT\r"
-    assert f.answer(b"\r\nOK\r\n") == b"ATE0\r"
-    assert f.answer(b"ATE0\r\r\nOK\r\n") == b"AT+CMEE=1\r"
+    assert f.poll() == b"ATE0Q0V1\r"
+    assert f.answer(b"ATE0Q0V1\r\r\nOK\r\n") == b"AT+CMEE=1\r"
     assert f.answer(b"\r\nOK\r\n") == b"AT+CPIN?\r"
     assert f.answer(b"\r\n+CPIN: READY\r\n\r\nOK\r\n") == (b"AT+CMGF=0\r" if pdu_mode else b"AT+CMGF=1\r")
     if not pdu_mode:

@@ -105,7 +105,7 @@ def test_iridium_driver_against_acomm_emulate_iridium(tmp_path):
     ports = []
     try:
         got = probe(em.links[0], b"AT+CSQ\r", b"OK\r\n")
-        assert b"+CSQ:5\r\nOK\r\n" in got, got
+        assert b"AT+CSQ\r\r\n+CSQ:5\r\n\r\nOK\r\n" in got, got  # echo, then V.250 verbose framing
         ports, nodes, events = nodes_on(em, lambda a: IridiumDriver(a, mo_mtu=270, mailbox_check_ms=1000),
                                         "satellite")
         # the buoy's first mailbox check fetches the waiting frame

@@ -43,6 +43,11 @@ def main(argv=None):
 
     ipnode.add_arguments(n)
 
+    r = sub.add_parser("replay", help="feed a capture (acomm emulate --log) through a driver and print its events")
+    from . import replay
+
+    replay.add_arguments(r)
+
     args = p.parse_args(argv)
     if args.cmd == "bench":
         from . import bench
@@ -60,6 +65,8 @@ def main(argv=None):
         return fuzz.main(args)
     if args.cmd == "node":
         return ipnode.main(args)
+    if args.cmd == "replay":
+        return replay.main(args)
     p.print_help()
     return 2
 

@@ -12,7 +12,9 @@
 # at --link; each --peer adds another, on its own pty when a path is given,
 # otherwise headless (it still acknowledges and answers pings, as a modem in
 # the water does). --time-scale runs the emulated world faster than real
-# time (airtimes and propagation shrink; useful for tests).
+# time (airtimes and propagation shrink; useful for tests). --log FILE
+# writes every byte that crosses the first modem's port, each way, with its
+# real time in ms (acomm_cpython.capture), for `acomm replay`.
 
 import os
 import select
@@ -184,11 +186,12 @@ class Station:
 
 class EmulatorHost:
     def __init__(self, modem, link, address=1, peers=(), options=None, distance=100.0, loss=0.0,
-                 seed=1, time_scale=1.0, tcp_port=None, tcp_host="127.0.0.1", incoming=()):
+                 seed=1, time_scale=1.0, tcp_port=None, tcp_host="127.0.0.1", incoming=(), log=None):
         from acomm_sim.medium import Medium
 
         cls = emulator_class(modem)
         self.modem = modem
+        self.log = log  # a capture.CaptureWriter for the first modem's port, or None
         self.time_scale = float(time_scale)
         self._t0 = time.monotonic()
         self.medium = Medium(default_distance=distance, loss=loss, seed=seed)
@@ -209,6 +212,10 @@ class EmulatorHost:
         except BaseException:
             self.close()
             raise
+
+    def _log(self, st, to, data):
+        if self.log is not None and st is self.stations[0]:
+            self.log.record((time.monotonic() - self._t0) * 1000, to, data)
 
     def now(self):
         return int((time.monotonic() - self._t0) * 1000 * self.time_scale) & 0x3FFFFFFF
@@ -234,6 +241,7 @@ class EmulatorHost:
             if st.pty and st.pty.master in r:
                 data = st.pty.read()
                 if data:
+                    self._log(st, "device", data)
                     st.emu.feed(now, data)
             if st.tcp:
                 if st.tcp.server in r:
@@ -242,12 +250,15 @@ class EmulatorHost:
                     if c in r:
                         data = st.tcp.read(c)
                         if data:
+                            self._log(st, "device", data)
                             st.emu.feed(now, data)
         for st in self.stations:
             st.emu.poll(now)
         self.medium.poll(now)
         for st in self.stations:
             out = st.emu.take_output()
+            if out:
+                self._log(st, "host", out)
             if st.pty:
                 if out:
                     st.pty.write(out)
@@ -267,6 +278,9 @@ class EmulatorHost:
             if st.tcp:
                 st.tcp.close()
         self.stations = []
+        if self.log is not None:
+            self.log.close()
+            self.log = None
 
 
 def add_arguments(p):
@@ -284,6 +298,8 @@ def add_arguments(p):
     p.add_argument("--tcp-host", default="127.0.0.1")
     p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
                    help="emulator option, e.g. packet_ms=100 (repeatable)")
+    p.add_argument("--log", metavar="FILE", help="write every byte of the first modem's port, each way, with its "
+                                                 "time (JSON lines; for acomm replay)")
     p.add_argument("--mt", action="append", default=[], metavar="HEX",
                    help="iridium, gsm: a message (hex bytes) waiting for the modem at the gateway (repeatable)")
 
@@ -307,9 +323,15 @@ def main(args):
     tcp = args.tcp
     if tcp == -1:
         tcp = MODEMS[args.modem][2] or 0
+    log = None
     try:
+        if args.log:
+            from .capture import CaptureWriter
+
+            log = CaptureWriter(open(args.log, "w"), args.modem)
         host = EmulatorHost(args.modem, args.link, args.address, [parse_peer(p) for p in args.peer], options,
-                            args.distance, args.loss, args.seed, args.time_scale, tcp, args.tcp_host, incoming)
+                            args.distance, args.loss, args.seed, args.time_scale, tcp, args.tcp_host, incoming,
+                            log)
     except ImportError as e:
         print("the %s emulator is not available: %s" % (args.modem, e), file=sys.stderr)
         return 1

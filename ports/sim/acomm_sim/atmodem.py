@@ -1,7 +1,15 @@
 # What the emulated Hayes-AT surface modems (Iridium SBD in acomm_sim.iridium,
 # GSM in acomm_sim.gsm) share: command lines ending in CR (a LF after it is
-# ignored), the echo (on after power-up, ATE0 turns it off), answers
-# `lead + text + CR LF`, a data phase after a prompt (a byte count, as for
+# ignored), the echo (on after power-up, ATE0 turns it off), the V.250
+# framing of answers in the mode the host chose (ISU AT Command Reference
+# table 3-1; 3GPP TS 27.007 / V.250 the same):
+#     ATV1 (verbose, power-up)   information text  CR LF text CR LF
+#                                result code       CR LF OK CR LF
+#     ATV0 (numeric)             information text  text CR LF
+#                                result code       0 CR  (4 for ERROR)
+# ATQ1 silences the result codes. Further lines of one information response
+# (the text of +CMGR under its header) are `text CR LF`. Basic commands may
+# be chained on one line (ATE0V1Q0). A data phase after a prompt (a byte count, as for
 # SBDWB, or up to Ctrl-Z with ESC to abort, as for CMGS), answers that come
 # later (an SBDIX session, an SMS being sent) while the modem takes no
 # commands, and the fault modes of acomm_sim.faults: corrupt_next /
@@ -11,7 +19,7 @@
 # then the banner lines.
 #
 # The subclass gives _command(now, text, c) (text as typed; c: what follows
-# "AT", in capitals; "AT" and "ATE0/1" are answered here), _reset()
+# "AT", in capitals; "AT" and chains of E, V, Q are answered here), _reset()
 # (power-up state), self.net (its network, polled with it) and, for the
 # data phase it opens, the function to call with the bytes (or None when
 # the phase timed out or was aborted). shared_network() gives every modem
@@ -27,11 +35,10 @@ _ESC = 0x1B
 
 
 class AtModem(SansIO, FaultModes):
-    def __init__(self, now, banner, boot_ms, lead, line_cap=600):
+    def __init__(self, now, banner, boot_ms, line_cap=600):
         SansIO.__init__(self)
         self.banner = banner
         self.boot_ms = boot_ms
-        self.lead = lead
         self.line_cap = line_cap
         self._faults = []
         self._booting_until = None
@@ -42,7 +49,10 @@ class AtModem(SansIO, FaultModes):
         self._reset_io()
 
     def _reset_io(self):
+        # the factory defaults of both real units: E1 V1 Q0
         self.echo = True
+        self.verbose = True
+        self.quiet = False
         self._line = bytearray()
         self._over = False
         self._data = None  # the data phase: bytes so far
@@ -95,7 +105,7 @@ class AtModem(SansIO, FaultModes):
         if self._over:
             self._over = False
             self.ignored += 1
-            self._emit(b"ERROR")
+            self.error()
             return
         if self.echo:
             self._out.extend(text + b"\r")
@@ -116,11 +126,16 @@ class AtModem(SansIO, FaultModes):
                 return
             self._mute = True
         c = text[2:].upper()
-        if c == b"":
-            self.ok()
-        elif c in (b"E0", b"E1", b"E"):
-            self.echo = c == b"E1"
-            self.ok()
+        basic = _basic(c)
+        if basic is not None:
+            for k, v in basic:
+                if k == 69:
+                    self.echo = v == 1
+                elif k == 86:
+                    self.verbose = v == 1
+                else:
+                    self.quiet = v == 1
+            self.ok()  # in the mode just set, as the real units do
         else:
             self._command(now, text, c)
         if self._later is not None:
@@ -155,34 +170,54 @@ class AtModem(SansIO, FaultModes):
         self._later = [ticks_add(now, ms), fn, False]
 
     # -- output -------------------------------------------------------------------------
-    def reply(self, line):
+    def reply(self, line, more=False):
+        # information text; more: a further line of the same response
         if not self._mute:
-            self._emit(line)
+            self._emit(line, _MORE if more else _INFO)
+
+    def result(self, line, code):
+        # a final result code (numeric form `code`) unless ATQ1
+        if not self._mute and not self.quiet:
+            self._emit(line, code)
 
     def ok(self):
-        self.reply(b"OK")
+        self.result(b"OK", b"0")
 
     def error(self):
-        self.reply(b"ERROR")
+        self.result(b"ERROR", b"4")
 
-    def notify(self, line):
-        # unsolicited: not while restarting, not muted
+    def notify(self, line, code=None):
+        # unsolicited: not while restarting, not muted; a result code
+        # (numeric form `code`) or information text
         if self._booting_until is None:
-            self._emit(line)
+            self._emit(line, code or _INFO)
+
+    def prompt(self, text):
+        # a data prompt (the SMS "> "): after CR LF in verbose mode
+        if not self._mute:
+            if self.verbose:
+                self._out.extend(CRLF)
+            self._out.extend(text)
 
     def raw(self, data):
         if not self._mute:
             self._out.extend(data)
 
-    def _emit(self, line):
+    def _emit(self, line, kind):
+        # kind: _INFO, _MORE or the numeric form of a result code
         f = self._fault(("corrupt", "truncate"), line)
-        term = CRLF
+        if not self.verbose and kind is not _INFO and kind is not _MORE:
+            line = kind
+            term = b"\r"
+        else:
+            term = CRLF
+            if self.verbose and kind is not _MORE:
+                self._out.extend(CRLF)
         if f is not None and f[0] == "corrupt":
             line = hit(line, len(line) // 2)
         elif f is not None:
             line = line[: len(line) // 2]
-            term = CRLF if f[3] else b""
-        self._out.extend(self.lead)
+            term = term if f[3] else b""
         self._out.extend(line)
         self._out.extend(term)
 
@@ -199,7 +234,33 @@ class AtModem(SansIO, FaultModes):
         self._reset()
 
     def _booted(self, now):
-        self._print_banner()
+        for ln in self.banner:
+            self._emit(ln, _INFO)
+
+
+_INFO = "info"
+_MORE = "more"
+
+
+def _basic(c):
+    # "E0V1Q0" -> [(69, 0), (86, 1), (81, 0)]: a chain of the basic
+    # commands E, V, Q (no digit means 0); "" (plain AT) -> []; None for
+    # anything else
+    out = []
+    i = 0
+    while i < len(c):
+        k = c[i]
+        if k not in (69, 81, 86):
+            return None
+        v = 0
+        if i + 1 < len(c) and c[i + 1] in (48, 49):
+            v = c[i + 1] - 48
+            i += 1
+        elif i + 1 < len(c) and 50 <= c[i + 1] <= 57:
+            return None
+        out.append((k, v))
+        i += 1
+    return out
 
 
 def shared_network(medium, cls, attr):

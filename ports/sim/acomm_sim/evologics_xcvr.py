@@ -171,6 +171,8 @@ class Transceiver:
         else:
             tail = b"%d,%d,%d,%d,0.00," % (self.burst_bitrate, rssi, integ, ptime)
         if m.zx:
+            # the firmware says when reception began, then when it ended
+            m.notify(b"RECVSTART")
             m.notify(b"RECVEND,%d,%d,%d,%d" % (m.clock_us(t), dur, rssi, integ))
         m.received(head + tail, p.data, burst)
 

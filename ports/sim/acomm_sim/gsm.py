@@ -4,12 +4,15 @@
 # take_output(). Messages travel through a shared acomm_sim.gsm_net
 # GsmNetwork, addressed by phone number.
 #
-# Commands: AT, ATE0/ATE1, ATI, AT+CGSN, AT+CMEE=<n>, AT+CPIN?, AT+CSCS=...,
+# Commands: AT, ATE0/ATE1, ATV0/ATV1, ATQ0/ATQ1 (chained too), AT&F, ATI,
+# AT+CGMI/+GMI, AT+CGMM/+GMM, AT+CGMR/+GMR, AT+CGSN/+GSN, AT+CMEE=<n>, AT+CPIN?, AT+CSCS=...,
 # AT+CMGF=<0|1>, AT+CMGF?, AT+CNMI=<mode>,<mt>,..., AT+CSQ, AT+CPMS?,
 # AT+CMGS (PDU: =<tpdu length>; text: ="<number>"), AT+CMGR=<i>,
 # AT+CMGL (PDU: =<stat 0..4>; text: ="REC UNREAD"|"REC READ"|"ALL"),
-# AT+CMGD=<i>[,<flag 0..4>]. Anything else: ERROR. Answers are
-# `CR LF text CR LF` (verbose result codes); the prompt is CR LF "> ".
+# AT+CMGD=<i>[,<flag 0..4>]. Anything else: ERROR. Answers are framed as
+# V.250 says for the mode the host set (acomm_sim.atmodem; power-up: echo
+# on, verbose): `CR LF text CR LF`; the +CMGS prompt is CR LF "> " (no line
+# end); the data line of +CMGR / +CMGL follows its header directly.
 #
 # Power-up state: echo on, PDU mode, no new-message indications until
 # AT+CNMI (mt=1: "+CMTI: "SM",<i>" when a message is stored). The message
@@ -29,7 +32,6 @@ from .atmodem import AtModem
 from .gsm_net import network_of
 
 _STAT_TEXT = (b"REC UNREAD", b"REC READ", b"STO UNSENT", b"STO SENT")
-_PROMPT = b"\r\n> "
 
 
 def default_number(address):
@@ -54,7 +56,7 @@ def _bcd2(v):
 class GsmEmulator(AtModem):
     def __init__(self, medium, address=1, now=0, number=None, rssi=20, storage=20, send_ms=2000,
                  data_timeout_ms=60000, boot_ms=2000, banner=(b"RDY",)):
-        AtModem.__init__(self, now, banner, boot_ms, b"\r\n")
+        AtModem.__init__(self, now, banner, boot_ms)
         self.net = network_of(medium)
         self.address = address
         self.number = number or default_number(address)
@@ -104,8 +106,23 @@ class GsmEmulator(AtModem):
         if c.startswith(b"I"):
             self.reply(b"acomm GSM modem emulator")
             self.ok()
-        elif c == b"+CGSN":
+        elif c in (b"+CGSN", b"+GSN"):
             self.reply(b"35%013d" % self.address)
+            self.ok()
+        elif c in (b"+CGMI", b"+GMI"):
+            self.reply(b"acomm")
+            self.ok()
+        elif c in (b"+CGMM", b"+GMM"):
+            self.reply(b"GSM modem emulator")
+            self.ok()
+        elif c in (b"+CGMR", b"+GMR"):
+            self.reply(b"Revision: acomm-sim 1")
+            self.ok()
+        elif c in (b"&F", b"&F0"):
+            self.echo = True
+            self.verbose = True
+            self.quiet = False
+            self._reset()
             self.ok()
         elif c.startswith(b"+CMEE="):
             self.cmee = 1
@@ -167,7 +184,7 @@ class GsmEmulator(AtModem):
                 return
             n = None
             dest = q[1].decode()
-        self.raw(_PROMPT)
+        self.prompt(b"> ")
         self.begin_data(now, None, self.data_timeout_ms, lambda t, d: self._typed(t, d, n, dest))
 
     def _typed(self, now, data, n, dest):
@@ -203,22 +220,24 @@ class GsmEmulator(AtModem):
         self.ok()
 
     # -- reading ----------------------------------------------------------------------------------
-    def _show(self, head, index, e):
+    def _show(self, head, index, e, more=False):
         # +CMGR / +CMGL lines for one stored message; a received one
-        # becomes "read"
+        # becomes "read". The data line follows its header with no blank
+        # line (27.005 3.4.2/3.4.3: header CR LF data); so does the next
+        # +CMGL entry (more=True)
         stat, number, dcs, data, t = e
         day, secs = t
         if self.cmgf == 0:
             scts = bytes((0x42, 0x50, _bcd2(day), _bcd2(secs // 3600), _bcd2(secs // 60 % 60), _bcd2(secs % 60), 0))
             p = pdu.encode_deliver(number, data, dcs, scts)
             lead = b"%d," % index if index is not None else b""
-            self.reply(head + lead + b"%d,,%d" % (stat, len(p) - 1 - p[0]))
-            self.reply(pdu.to_hex(p))
+            self.reply(head + lead + b"%d,,%d" % (stat, len(p) - 1 - p[0]), more)
+            self.reply(pdu.to_hex(p), True)
         else:
             ts = b"24/05/%02d,%02d:%02d:%02d+00" % (day, secs // 3600, secs // 60 % 60, secs % 60)
             lead = b"%d," % index if index is not None else b""
-            self.reply(head + lead + b'"%s","%s",,"%s"' % (_STAT_TEXT[stat], number.encode(), ts))
-            self.reply(data if pdu.alphabet(dcs) == 0 else pdu.to_hex(data))
+            self.reply(head + lead + b'"%s","%s",,"%s"' % (_STAT_TEXT[stat], number.encode(), ts), more)
+            self.reply(data if pdu.alphabet(dcs) == 0 else pdu.to_hex(data), True)
         if stat == 0:
             e[0] = 1
 
@@ -232,10 +251,12 @@ class GsmEmulator(AtModem):
         if not 0 <= want <= 4:
             self.cms(302)
             return
+        more = False
         for i in sorted(self.store_):
             e = self.store_[i]
             if want == 4 or e[0] == want:
-                self._show(b"+CMGL: ", i, e)
+                self._show(b"+CMGL: ", i, e, more)
+                more = True
         self.ok()
 
     def _cmgd(self, arg):

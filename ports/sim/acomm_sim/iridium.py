@@ -4,11 +4,16 @@
 # it. Sans-IO: feed(now, bytes), poll(now), take_output(). Sessions go
 # through a shared acomm_sim.iridium_net.IridiumNetwork (the gateway).
 #
-# Commands: AT, ATE0/ATE1, AT&K0/AT&K3, AT&W0, AT&F0, AT*R1, ATI<n>,
-# AT+CGSN, AT+CSQ, AT+CSQF, AT+CRIS, AT+CIER=..., AT+SBDAREG=<n>,
+# Commands: AT, ATE0/ATE1, ATV0/ATV1, ATQ0/ATQ1 (chained too: ATE0V1),
+# AT&K0/AT&K3, AT&W0, AT&F0, AT*R1, ATI<n>, AT+CGMI/+GMI, AT+CGMM/+GMM,
+# AT+CGMR/+GMR, AT+CGSN/+GSN, AT+CSQ, AT+CSQF, AT+CRIS, AT+CIER=..., AT+SBDAREG=<n>,
 # AT+SBDMTA=<0|1>, AT+SBDMTA?, AT+SBDWB=<n>, AT+SBDWT=<text>, AT+SBDRB,
 # AT+SBDRT, AT+SBDIX, AT+SBDIXA, AT+SBDD0/1/2, AT+SBDS, AT+SBDTC. Anything
-# else: ERROR. Answers are `text CR LF` as in the reference's example.
+# else: ERROR. Answers are framed as V.250 says for the mode the host set
+# (acomm_sim.atmodem; power-up: echo on, verbose): after the echo
+# "AT+SBDWB=5\r" comes "\r\nREADY\r\n"; after the data "\r\n0\r\n" and
+# "\r\nOK\r\n". SBDRB's binary block follows the echo at once, as on the
+# real unit. SBDRING is a result code (126 in numeric mode).
 #
 # A session takes session_ms, during which the modem takes no command. Its
 # MO status: the next armed failure (fail_sessions), else 32 (no network
@@ -28,10 +33,16 @@ from .atmodem import AtModem
 from .iridium_net import network_of
 
 
+# what a 9602 answers to +CGMM, and (the first lines of) +CGMR; the hardware
+# line is one a 9602 printed (docs.embeddedts.com, TS-IRIDIUM page)
+MODEL = b"IRIDIUM 9600 Family SBD Transceiver"
+REVISION = (b"Call Processor Version: TA19002", b"Hardware Version: BOOT07d2/9602NrvA-D/04/RAW0d")
+
+
 class IridiumEmulator(AtModem):
     def __init__(self, medium, address=1, now=0, imei=None, serial=None, bars=5, session_ms=8000,
                  mo_max=w.MO_MAX, mt_max=w.MT_MAX, wb_timeout_ms=60000, csq_ms=0, boot_ms=2000, banner=()):
-        AtModem.__init__(self, now, banner, boot_ms, b"")
+        AtModem.__init__(self, now, banner, boot_ms)
         self.net = network_of(medium)
         self.address = address
         self.imei = imei or "3002340100%05d" % address
@@ -70,7 +81,7 @@ class IridiumEmulator(AtModem):
         if self.mta and self._booting_until is None:
             self.ring = True
             if self._later is None and self._data is None:
-                self.notify(b"SBDRING")
+                self.notify(b"SBDRING", b"126")
             else:
                 self._ring_due = True  # when the modem is back in command mode
 
@@ -83,7 +94,7 @@ class IridiumEmulator(AtModem):
         AtModem.poll(self, now)
         if self._ring_due and self._later is None and self._data is None and self._booting_until is None:
             self._ring_due = False
-            self.notify(b"SBDRING")
+            self.notify(b"SBDRING", b"126")
 
     # -- commands ----------------------------------------------------------------------------------
     def _command(self, now, text, c):
@@ -91,12 +102,24 @@ class IridiumEmulator(AtModem):
             self.ok()
         elif c == b"&F0":
             self.echo = True
+            self.verbose = True
+            self.quiet = False
             self.mta = False
             self.ok()
         elif c.startswith(b"I"):
             self.reply(b"IRIDIUM 9600 Family SBD Transceiver (acomm emulator)")
             self.ok()
-        elif c == b"+CGSN":
+        elif c in (b"+CGMI", b"+GMI"):
+            self.reply(b"Iridium")
+            self.ok()
+        elif c in (b"+CGMM", b"+GMM"):
+            self.reply(MODEL)
+            self.ok()
+        elif c in (b"+CGMR", b"+GMR"):
+            for i, ln in enumerate(REVISION):
+                self.reply(ln, i > 0)
+            self.ok()
+        elif c in (b"+CGSN", b"+GSN"):
             self.reply(self.imei.encode())
             self.ok()
         elif c == b"+CSQ" or c == b"+CSQF":
@@ -122,7 +145,7 @@ class IridiumEmulator(AtModem):
             self._read_binary()
         elif c == b"+SBDRT":
             self.reply(b"+SBDRT:")
-            self.reply(self.mt)
+            self.reply(self.mt, True)
             self.ok()
         elif c == b"+SBDIX" or c == b"+SBDIXA":
             self.later(now, self.session_ms, lambda t: self._session_end(t, c))

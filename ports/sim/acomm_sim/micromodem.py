@@ -5,7 +5,9 @@
 # (acomm_sim.medium); the acoustic side lives in micromodem_xcvr.
 #
 # Host sentences: $CCCYC (SRC = this modem; the DRQ-driven cycle CYC ->
-# $CACYC -> $CADRQ per frame -> $CCTXD -> $CATXD ... -> $CATXP / $CATXF),
+# $CACYC -> $CADRQ per frame -> $CCTXD -> $CATXD ... -> $CATXP / $CATXF;
+# at rate 0 the cycle-init mini-packet, $CATXP,0 and $CATXF,0, comes between
+# $CACYC and the first $CADRQ),
 # $CCMUC (mini-packet), $CCMPC (ping), $CCCFG / $CCCFQ (NVRAM), $CCCLK (the
 # clock), $CCMSC to itself with argument 0 (restart). Checksums are checked
 # when present ($CAERR,...,NMEA,... on a bad one); an unknown sentence also
@@ -201,10 +203,18 @@ class MicroModemEmulator(SansIO, FaultModes):
         if src != self.address:
             return self._bad("CYC", "uplink cycles not emulated")
         self._cycle = [dst, rate, ack, nframes, [], None, src]
-        self._drq(now)
+        if rate == 0:
+            # FSK: the cycle header goes out first as its own mini-packet,
+            # reported by $CATXF; only then the data request (pyacomms'
+            # WaitingForCiTxf state waits for that $CATXF, issue 22)
+            self.xcvr.send_cycle_init(now, self._drq)
+        else:
+            self._drq(now)
 
-    def _drq(self, now):
+    def _drq(self, now, _=None):
         c = self._cycle
+        if c is None:
+            return  # restarted while the cycle init was on the air
         self.emit("CADRQ", self.tod(), c[6], c[0], c[2], FRAME_BYTES[c[1]], len(c[4]) + 1)
         c[5] = ticks_add(now, self.data_timeout_ms)
 

@@ -2,7 +2,8 @@
 # pings and acknowledgements as packets on the shared medium, what the modem
 # reports about them on its serial port, and what it answers by itself:
 #
-#   sender        $CATXP,n now, $CATXF,n when the packet's last bit leaves
+#   sender        $CATXP,n now, $CATXF,n when the packet's last bit leaves;
+#                 at rate 0 first the cycle init: $CATXP,0 and $CATXF,0
 #   receiver      $CARXP,<0 FSK / 1 PSK>, $CACYC (the cycle header), then
 #                 $CARXD per frame for this modem or the broadcast address;
 #                 for acknowledged frames to this modem an automatic ack
@@ -96,12 +97,27 @@ class Transceiver:
         for f in frames:
             n += len(f)
         self.modem.emit("CATXP", n)
-        end = self._transmit(now, Packet(P_DATA, self.addr, dst, rate, ack, frames), self.air.packet_ms(rate, n))
+        air = self.air.packet_ms(rate, n)
+        if rate == 0:
+            air -= self.air.mini_ms()  # the cycle init has gone already
+        end = self._transmit(now, Packet(P_DATA, self.addr, dst, rate, ack, frames), air)
         self.at(end, self._txf, n)
         if ack and dst != self.modem.broadcast:
             window = 2 * self.turnaround_ms + self.air.mini_ms() + 2 * self.modem.max_travel_ms()
             for k in range(len(frames)):
                 self._acks.append([dst, k + 1, ticks_add(end, window)])
+
+    def send_cycle_init(self, now, then):
+        # Rate 0: the cycle header as a mini-packet of its own before the
+        # data is asked for; then(t) runs when its $CATXF is out. Not put on
+        # the medium: the receivers learn of the cycle with its data packet.
+        self.modem.emit("CATXP", 0)
+        self._tx_until = ticks_add(now, self.air.mini_ms())
+        self.at(self._tx_until, self._ci_done, then)
+
+    def _ci_done(self, t, then):
+        self.modem.emit("CATXF", 0)
+        then(t)
 
     def send_mini(self, now, dst, value):
         self.modem.emit("CATXP", 0)

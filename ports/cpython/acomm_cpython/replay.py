@@ -1,0 +1,139 @@
+# `acomm replay FILE --driver NAME`: feed the modem -> host bytes of a
+# capture (acomm_cpython.capture) through one of acomm's drivers at their
+# recorded times and print the events the driver yields, one per line:
+#
+#   12040 EV_DRIVER_UP
+#   31210 EV_RX src=2 dst=1 data=68656c6c6f ('hello')
+#
+# A send the capture records (captures of acomm's own sessions have them)
+# is made again at its time, so its statuses show too ("send" lines).
+# The driver is polled every step_ms between the records, as a running host
+# polls it, so its timers (command timeouts, retries) fire where they did.
+# What the driver writes is dropped (--writes prints it, as "> hex"): the
+# replay shows how the driver reads what the modem said. A capture made by
+# acomm's own driver replays to the same events (the driver is
+# deterministic); one from other host software shows how acomm's driver
+# would have read that modem's bytes. A damaged file: one line naming the
+# file and the line, exit 2.
+
+import sys
+
+from .capture import SEND, TO_HOST, CaptureError, read_capture
+
+# driver names: those of acomm_sim.world.MODEMS (seatrac, evologics,
+# micromodem, benthos, iridium, gsm, bpsk, fhss)
+
+
+def make_driver(name, address, options):
+    from acomm_sim.world import MODEMS
+
+    if name not in MODEMS:
+        raise ValueError("unknown driver %r (one of %s)" % (name, ", ".join(sorted(MODEMS))))
+    return MODEMS[name][0](address, dict(options))
+
+
+def event_names():
+    import acomm.events as ev
+
+    return dict((getattr(ev, k), k) for k in dir(ev) if k.startswith("EV_"))
+
+
+def replay(records, driver, step_ms=10, tail_ms=0, writes=None):
+    """Run the driver over the capture's records from t = 0; [(t_ms, event)]
+    in order, where a send the capture records gives ("send", handle, addr)
+    or ("send refused", reason). writes(t, bytes), when given, sees what
+    the driver wrote."""
+    from acomm.errors import AcommError
+
+    out = []
+
+    def drain(now):
+        out.extend((now, e) for e in driver.take_events())
+        w = driver.take_output()
+        if w and writes is not None:
+            writes(now, w)
+
+    end_at = (records[-1][0] if records else 0) + tail_ms
+    t = 0
+    i = 0
+    while True:
+        while i < len(records) and records[i][0] <= t:
+            _, to, data = records[i]
+            i += 1
+            if to == TO_HOST:
+                driver.feed(t, data)
+            elif to == SEND:
+                driver.poll(t)  # a host polls, then its application asks
+                drain(t)
+                addr, payload, ack = data
+                try:
+                    out.append((t, ("send", driver.send(t, addr, payload, ack), addr)))
+                except AcommError as e:
+                    out.append((t, ("send refused", str(e))))
+            drain(t)
+        driver.poll(t)
+        drain(t)
+        if i >= len(records) and t >= end_at:
+            return out
+        # the next poll, or the next record if it comes sooner
+        t_next = t + step_ms
+        if i < len(records) and records[i][0] < t_next:
+            t_next = records[i][0]
+        t = t_next
+
+
+def describe(ev, names):
+    # one event as text: its name, then its fields
+    parts = [ev[0] if isinstance(ev[0], str) else names.get(ev[0], str(ev[0]))]
+    for x in ev[1:]:
+        if isinstance(x, (bytes, bytearray)):
+            b = bytes(x)
+            parts.append("%s (%r)" % (b.hex(), b))
+        else:
+            parts.append(repr(x))
+    return " ".join(parts)
+
+
+def add_arguments(p):
+    p.add_argument("file", help="a capture (JSON lines), e.g. from acomm emulate ... --log FILE")
+    p.add_argument("--driver", help="the driver to feed (default: the capture header's modem)")
+    p.add_argument("--address", type=int, default=1, help="the driver's own address (default 1)")
+    p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", help="driver option (repeatable)")
+    p.add_argument("--step-ms", type=int, default=10, help="poll the driver this often between records")
+    p.add_argument("--tail-ms", type=int, default=0, help="run the driver on this long after the last record")
+    p.add_argument("--writes", action="store_true", help="also print what the driver wrote ('> hex')")
+
+
+def main(args):
+    from .emulate import parse_value
+
+    try:
+        with open(args.file, encoding="utf-8", errors="replace") as f:
+            header, records = read_capture(f)
+    except OSError as e:
+        print("%s: %s" % (args.file, e.strerror or e), file=sys.stderr)
+        return 2
+    except CaptureError as e:
+        print("%s:%d: damaged capture: %s" % (args.file, e.line, e.reason), file=sys.stderr)
+        return 2
+    options = {}
+    for kv in args.option:
+        if "=" not in kv:
+            print("--option wants KEY=VALUE, got %r" % kv, file=sys.stderr)
+            return 2
+        k, v = kv.split("=", 1)
+        options[k.strip()] = parse_value(v.strip())
+    name = args.driver or header.get("modem")
+    try:
+        driver = make_driver(name, args.address, options)
+    except (ValueError, TypeError) as e:
+        print("%s: cannot make the %s driver: %s" % (args.file, name, e), file=sys.stderr)
+        return 2
+    names = event_names()
+
+    def writes(t, data):
+        print("%d > %s" % (t, data.hex()))
+
+    for t, ev in replay(records, driver, args.step_ms, args.tail_ms, writes if args.writes else None):
+        print("%d %s" % (t, describe(ev, names)))
+    return 0
