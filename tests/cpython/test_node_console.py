@@ -116,17 +116,17 @@ def test_a_file_through_the_transport_and_ctrl_c_with_a_persistent_store(tmp_pat
             buoy.expect("ready")
             diver.expect("ready")
             buoy.send("file diver %s --priority 5" % src)
-            assert buoy.expect("file 1 to diver") == "file 1 to diver: 200 bytes from %s, queued" % src
-            assert buoy.expect("file 1 ", timeout=60) == "file 1 delivered"
-            line = diver.expect("received file")
-            assert line.startswith("received file buoy -> diver: 200 bytes, saved as " + str(inbox))
+            assert buoy.expect("packet 1 to diver") == "packet 1 to diver: 200 bytes from %s, queued" % src
+            assert buoy.expect("packet 1 ", timeout=60) == "packet 1 delivered"
+            line = diver.expect("received packet")
+            assert line.startswith("received packet buoy -> diver: 200 bytes, saved as " + str(inbox))
             saved = line.rsplit(" ", 1)[1]
             assert open(saved, "rb").read() == data
             # the diver leaves; a second file is queued, then Ctrl-C: exit 0
             rc, err = diver.finish()
             assert rc == 0, err
             buoy.send("file diver %s --lifespan 600" % src)
-            buoy.expect("file 2 to diver")
+            buoy.expect("packet 2 to diver")
         finally:
             diver.kill()
             rc, err = buoy.finish(signal.SIGINT)

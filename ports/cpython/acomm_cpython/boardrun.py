@@ -151,7 +151,7 @@ def main(args):
                       listener=lambda ev: holder[0].on_event(ev), say=lambda t: out.emit({"event": "error", "error": t}),
                       make_report=make_report)
         node = board.node
-        console = Console(node, board.transport, out, args.lifespan, args.inbox, wheres)
+        console = Console(node, board.transport, out, args.lifespan, args.inbox, wheres, board.station)
         holder.append(console)
         watches = [(ln, wheres[ln][0], wheres[ln][1], StartWatch(link.driver)) for ln, link in node.links.items()]
 

@@ -34,6 +34,7 @@ HELP = (
     "range DST [--link NAME]                        measure the range to DST",
     "cancel ID                                      cancel a send or range request",
     "status                                         links, neighbours, queues, store, last errors",
+    "alarm NAME, chat TEXT                          a board's station (acomm run): CADDY alarm or chat",
     "help                                           this list; Ctrl-C or Ctrl-D leaves",
 )
 _FILE_LIFESPAN_S = 3600.0
@@ -91,10 +92,12 @@ class Console:
     node: acomm.node.Node; transport: acomm.transport.Transport or None (then
     `file` is refused); out: eventlines.Output; inbox: a folder where whole
     packets that arrive are saved (None: not saved); wheres: {link name:
-    (kind, device)} for the status report."""
+    (kind, device)} for the status report; station: the board's
+    acomm.station.Station (alarm, chat) or None."""
 
-    def __init__(self, node, transport, out, lifespan_s=30.0, inbox=None, wheres=None):
+    def __init__(self, node, transport, out, lifespan_s=30.0, inbox=None, wheres=None, station=None):
         self.node = node
+        self.station = station
         self.transport = transport
         self.out = out
         self.lifespan_s = lifespan_s
@@ -204,7 +207,7 @@ class Console:
             data = f.read()
         pid = self.transport.send(self.node.clock(), dst, data, _lifespan(opts, _FILE_LIFESPAN_S), _priority(opts))
         self._progress[pid] = -1
-        self.out.emit({"event": "file", "id": pid, "dst": dst, "bytes": len(data), "path": rest[1]})
+        self.out.emit({"event": "packet", "id": pid, "dst": dst, "bytes": len(data), "path": rest[1]})
 
     def cmd_range(self, words):
         rest, opts = _options(words, {"link": str})
@@ -228,6 +231,30 @@ class Console:
             if link.cancel(now, rid, "canceled at the console"):
                 return  # its final status (canceled) follows as an event
         raise ConsoleError("no request %d waiting on any link" % rid)
+
+    def _station(self):
+        if self.station is None:
+            raise ConsoleError("this node has no station (a board's, under acomm run)")
+        return self.station
+
+    def cmd_alarm(self, words):
+        from acomm.catalog.caddy import ALARMS
+
+        if len(words) != 1 or words[0] not in ALARMS:
+            raise ConsoleError("usage: alarm NAME, NAME one of %s" % ", ".join(ALARMS))
+        self._queued(self._station().alarm(self.node.clock(), words[0]), self.station.alarm_to, "alarm " + words[0])
+
+    def cmd_chat(self, words):
+        if not words:
+            raise ConsoleError("usage: chat TEXT")
+        st = self._station()
+        self._queued(st.chat(self.node.clock(), " ".join(words)), st.report_to, "chat")
+
+    def _queued(self, pid, dst, what):
+        if pid is None:
+            raise ConsoleError("the transport refused it (see status)")
+        self._progress[pid] = -1
+        self.out.emit({"event": "packet", "id": pid, "dst": dst, "what": what})
 
     def cmd_help(self, words):
         self.out.emit({"event": "help", "lines": list(HELP)})
@@ -311,5 +338,5 @@ def as_text_short(d):
     # an error's line for the status report
     if d["event"] == "refused":
         return "refused from %s: %s" % (d["src"], d["reason"])
-    what = ("%s %d" % (d["link"], d["id"])) if "link" in d else "file %d" % d["id"]
+    what = ("%s %d" % (d["link"], d["id"])) if "link" in d else "packet %d" % d["id"]
     return "%s %s%s" % (what, d["status"], (": " + d["reason"]) if d.get("reason") else "")

@@ -28,6 +28,19 @@ def payload_fields(data):
         return {"hex": data.hex(), "bytes": len(data)}
 
 
+def caddy_messages(data):
+    """[[message name, values], ...] when the packet is CADDY messages (acomm.catalog.caddy), else None."""
+    from acomm.catalog import caddy
+    from acomm.errors import AcommError
+
+    try:
+        msgs = caddy.CATALOG.unpack(bytes(data))
+    except (AcommError, ValueError, IndexError):
+        return None
+    return [[m.name, dict((k, round(v, 3) if isinstance(v, float) else v) for k, v in vals.items())]
+            for m, vals in msgs] or None
+
+
 def as_dict(ev):
     """The dict of a node event, or None for events a console does not show (caps)."""
     code = ev[0]
@@ -44,10 +57,14 @@ def as_dict(ev):
         return {"event": "range", "link": ev[1].name, "id": ev[2],
                 "ranges": dict((n, None if m is None else round(m, 1)) for n, m in zip(ev[3], ev[4]))}
     if code == EV_PACKET_STATUS:
-        return {"event": "file_status", "id": ev[1], "status": _name(ev[2], STATUS_NAMES), "reason": ev[3] or "",
+        return {"event": "packet_status", "id": ev[1], "status": _name(ev[2], STATUS_NAMES), "reason": ev[3] or "",
                 "final": is_final(ev[2])}
     if code == EV_PACKET:
-        return {"event": "file_received", "src": ev[1], "dst": ev[2], "bytes": len(ev[3])}
+        d = {"event": "packet_received", "src": ev[1], "dst": ev[2], "bytes": len(ev[3])}
+        caddy = caddy_messages(ev[3])
+        if caddy:
+            d["caddy"] = caddy
+        return d
     if code == EV_REFUSED:
         return {"event": "refused", "link": ev[1].name if ev[1] is not None else None, "src": ev[2],
                 "reason": ev[3]}
@@ -73,20 +90,23 @@ def as_text(d):
     if e == "range":
         parts = ["%s %s" % (n, "no answer" if m is None else "%.1f m" % m) for n, m in d["ranges"].items()]
         return "range %s %d %s" % (d["link"], d["id"], ", ".join(parts))
-    if e == "file_status":
+    if e == "packet_status":
         if not d["final"]:
             return None
-        return "file %d %s%s" % (d["id"], d["status"], _reason(d))
-    if e == "file_received":
-        return "received file %s -> %s: %d bytes%s" % (d["src"], d["dst"], d["bytes"],
-                                                       (", saved as " + d["saved"]) if d.get("saved") else "")
+        return "packet %d %s%s" % (d["id"], d["status"], _reason(d))
+    if e == "packet_received":
+        caddy = "".join("; CADDY %s %s" % (m[0], json.dumps(m[1], sort_keys=True)) for m in d.get("caddy", ()))
+        return "received packet %s -> %s: %d bytes%s%s" % (d["src"], d["dst"], d["bytes"], caddy,
+                                                           (", saved as " + d["saved"]) if d.get("saved") else "")
     if e == "refused":
         return "refused from %s%s: %s" % (d["src"], (" on " + d["link"]) if d["link"] else "", d["reason"])
     if e == "sent":
         return "sent %s %d to %s (%d bytes, priority %d%s)" % (d["link"], d["id"], d["dst"], d["bytes"], d["priority"],
                                                               ", ack" if d["ack"] else "")
-    if e == "file":
-        return "file %d to %s: %d bytes from %s, queued" % (d["id"], d["dst"], d["bytes"], d["path"])
+    if e == "packet":
+        if "what" in d:
+            return "packet %d to %s: %s, queued" % (d["id"], d["dst"], d["what"])
+        return "packet %d to %s: %d bytes from %s, queued" % (d["id"], d["dst"], d["bytes"], d["path"])
     if e == "ranging":
         return "ranging %s %d %s" % (d["link"], d["id"], d["dst"])
     if e == "progress":
@@ -151,7 +171,7 @@ class Output:
     def _progress(self, d):
         if self.json or not self.tty:
             return
-        bar = "file %d %s" % (d["id"], progress_bar(d["acked"], d["count"])) if d["count"] else ""
+        bar = "packet %d %s" % (d["id"], progress_bar(d["acked"], d["count"])) if d["count"] else ""
         pad = " " * max(0, len(self._bar) - len(bar))
         self._bar = bar
         self.stream.write("\r" + bar + pad + ("\r" + bar if pad else ""))
