@@ -110,7 +110,8 @@ def test_a_file_through_the_transport_and_ctrl_c_with_a_persistent_store(tmp_pat
         # the drivers' airtime model as fast as the emulated water
         fast = ["--driver-option", "packet_ms=25", "--driver-option", "byte_ms=4", "--driver-option",
                 "turnaround_ms=15"]
-        buoy = _node("buoy", 1, "diver", 2, water.paths[0], "--store", str(tmp_path / "store"), *fast)
+        buoy = _node("buoy", 1, "diver", 2, water.paths[0], "--store", str(tmp_path / "store"), "--log",
+                     str(tmp_path / "buoy.log"), *fast)
         diver = _node("diver", 2, "buoy", 1, water.paths[1], "--inbox", str(inbox), *fast)
         try:
             buoy.expect("ready")
@@ -132,6 +133,11 @@ def test_a_file_through_the_transport_and_ctrl_c_with_a_persistent_store(tmp_pat
             rc, err = buoy.finish(signal.SIGINT)
             assert rc == 0, err
             _no_traceback(err)
+    # the transfer's progress went to the log, up to every fragment acknowledged
+    progress = [d for d in map(json.loads, open(str(tmp_path / "buoy.log"))) if d["event"] == "progress"]
+    assert progress and progress[0]["id"] == 1, progress
+    assert all(d["acked"] <= d["sent"] <= d["count"] for d in progress), progress
+    assert any(d["id"] == 1 and d["sent"] == d["count"] > 1 for d in progress), progress
     # the store holds the second file, and a transport opened on it resumes it
     from acomm.node import Node
     from acomm.store import Store
@@ -187,3 +193,25 @@ def test_modem_specs_parse():
     for bad in ("", "seatrac:", "x:/dev/y", "seatrac:/dev/y:12", "evologics:tcp://h:0"):
         with pytest.raises(ModemSpecError):
             parse_spec(bad)
+
+
+def test_the_progress_line_on_a_terminal():
+    import io
+
+    from acomm_cpython.eventlines import Output, progress_bar
+
+    assert progress_bar(5, 20) == "[#####...............] 5/20"
+    buf = io.StringIO()
+    out = Output(buf, tty=True)
+    out.emit({"event": "progress", "id": 3, "sent": 2, "acked": 0, "count": 8})
+    out.emit({"event": "error", "error": "x"})
+    out.emit({"event": "progress", "id": 3, "sent": 8, "acked": 8, "count": 8})
+    bar2 = "packet 3 " + progress_bar(2, 8) + " sent, 0 acknowledged"
+    bar8 = "packet 3 " + progress_bar(8, 8) + " sent, 8 acknowledged"
+    # the bar, cleared for the line, drawn again under it, then redrawn in place
+    assert buf.getvalue() == ("\r" + bar2 + "\r" + " " * len(bar2) + "\rerror: x\n" + bar2 + "\r" + bar8), buf.getvalue()
+    out.emit({"event": "packet_status", "id": 3, "status": "delivered", "reason": "", "final": True})
+    assert buf.getvalue().endswith(bar8 + "\r" + " " * len(bar8) + "\rpacket 3 delivered\n")  # the bar is gone
+    piped = io.StringIO()
+    Output(piped, tty=False).emit({"event": "progress", "id": 3, "sent": 2, "acked": 0, "count": 8})
+    assert piped.getvalue() == ""  # no bar in a pipe or a file

@@ -206,7 +206,7 @@ class Console:
         with open(rest[1], "rb") as f:
             data = f.read()
         pid = self.transport.send(self.node.clock(), dst, data, _lifespan(opts, _FILE_LIFESPAN_S), _priority(opts))
-        self._progress[pid] = -1
+        self._progress[pid] = None
         self.out.emit({"event": "packet", "id": pid, "dst": dst, "bytes": len(data), "path": rest[1]})
 
     def cmd_range(self, words):
@@ -253,7 +253,7 @@ class Console:
     def _queued(self, pid, dst, what):
         if pid is None:
             raise ConsoleError("the transport refused it (see status)")
-        self._progress[pid] = -1
+        self._progress[pid] = None
         self.out.emit({"event": "packet", "id": pid, "dst": dst, "what": what})
 
     def cmd_help(self, words):
@@ -318,7 +318,11 @@ class Console:
 
     # -- progress of the files being sent -------------------------------------------
     def poll(self):
-        """Emits a progress event for each file whose acknowledged fragments changed."""
+        """Emits a progress event for each packet whose fragments sent or acknowledged changed.
+
+        sent: fragments acknowledged plus those of the current round handed
+        to the link; acked: acknowledged by the receiver (its SACKs come at
+        the end of each round)."""
         t = self.transport
         if t is None or not self._progress:
             return
@@ -328,10 +332,11 @@ class Console:
             o = p.out
             if p.pid not in self._progress or o is None or p.relayed:
                 continue
-            done = sum(1 for a in o.acked if a)
-            if done != self._progress[p.pid]:
-                self._progress[p.pid] = done
-                self.out.emit({"event": "progress", "id": p.pid, "acked": done, "count": o.count})
+            acked = sum(1 for a in o.acked if a)
+            sent = min(o.count, acked + (0 if o.probing else o.sent_in_round))
+            if (sent, acked) != self._progress[p.pid]:
+                self._progress[p.pid] = (sent, acked)
+                self.out.emit({"event": "progress", "id": p.pid, "sent": sent, "acked": acked, "count": o.count})
 
 
 def as_text_short(d):

@@ -144,6 +144,7 @@ class Output:
         self.log = log
         self.tty = stream.isatty() if tty is None else tty
         self._bar = ""
+        self._bar_id = None
 
     def emit(self, d):
         if self.log is not None:
@@ -156,9 +157,17 @@ class Output:
         if self.json:
             self._write(json.dumps(d))
             return
+        if d["event"] == "packet_status" and d["final"] and d["id"] == self._bar_id:
+            self._clear()  # the transfer is over: its bar goes
         text = as_text(d)
         if text is not None:
             self._write(text)
+
+    def _clear(self):
+        if self._bar:
+            self.stream.write("\r" + " " * len(self._bar) + "\r")
+        self._bar = ""
+        self._bar_id = None
 
     def _write(self, line):
         if self._bar:
@@ -171,8 +180,9 @@ class Output:
     def _progress(self, d):
         if self.json or not self.tty:
             return
-        bar = "packet %d %s" % (d["id"], progress_bar(d["acked"], d["count"])) if d["count"] else ""
+        bar = "packet %d %s sent, %d acknowledged" % (d["id"], progress_bar(d["sent"], d["count"]), d["acked"])
         pad = " " * max(0, len(self._bar) - len(bar))
         self._bar = bar
+        self._bar_id = d["id"]
         self.stream.write("\r" + bar + pad + ("\r" + bar if pad else ""))
         self.stream.flush()
