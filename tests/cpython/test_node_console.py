@@ -1,7 +1,8 @@
 # `acomm node --modem` with its console, as a user runs it: two node
 # processes on two beacons of one `acomm emulate seatrac` water, commands
 # typed on standard input, events read from standard output (text and JSON
-# lines), the --log file, Ctrl-C with a persistent store, and every kind of
+# lines), the --log file, Ctrl-C with a persistent store, an EvoLogics modem
+# on TCP (tcp:// and socket://), and every kind of
 # bad input answered with one line and the right exit status.
 # CPython only (processes, pseudo-terminals); every wait is bounded.
 
@@ -215,3 +216,42 @@ def test_the_progress_line_on_a_terminal():
     piped = io.StringIO()
     Output(piped, tty=False).emit({"event": "progress", "id": 3, "sent": 2, "acked": 0, "count": 8})
     assert piped.getvalue() == ""  # no bar in a pipe or a file
+
+
+EVO_FAST = {"packet_ms": 30, "im_bitrate": 9600, "burst_bitrate": 40000, "turnaround_ms": 20, "max_range_m": 300}
+
+
+@pytest.mark.parametrize("scheme", ["tcp", "socket"])
+def test_an_evologics_modem_on_ethernet(tmp_path, scheme):
+    # modem 1 on TCP (tcp:// is acomm's reconnecting client, socket:// is
+    # pyserial's URL, as for a serial server), modem 2 on its pty
+    opts = []
+    for k, v in EVO_FAST.items():
+        opts += ["--option", "%s=%s" % (k, v)]
+    evo1, evo2 = str(tmp_path / "evo1"), str(tmp_path / "evo2")
+    emu = Proc(["emulate", "evologics", "--link", evo1, "--address", "1", "--tcp", "0", "--peer", "2:%s:150" % evo2]
+               + opts)
+    try:
+        port = emu.expect("tcp 127.0.0.1:").rsplit(":", 1)[1]
+        emu.expect(evo2)
+        dopts = []
+        for k, v in dict(EVO_FAST, margin_ms=1000, cmd_timeout_ms=2000).items():
+            dopts += ["--driver-option", "%s=%s" % (k, v)]
+        top = Proc(["node", "--name", "topside", "--id", "1", "--known", "auv=2", "--modem",
+                    "evologics:%s://127.0.0.1:%s" % (scheme, port)] + dopts)
+        auv = Proc(["node", "--name", "auv", "--id", "2", "--known", "topside=1", "--modem", "evologics:" + evo2]
+                   + dopts)
+        try:
+            assert top.expect("acoustic:") == "acoustic: evologics on %s://127.0.0.1:%s, up" % (scheme, port)
+            top.expect("ready")
+            auv.expect("ready")
+            top.send("send auv dive to 20 m --ack")
+            assert top.expect("status acoustic 1") == "status acoustic 1 delivered"
+            assert auv.expect("received") == "received acoustic topside -> auv: dive to 20 m"
+        finally:
+            for p in (top, auv):
+                rc, err = p.finish()
+                assert rc == 0, err
+                _no_traceback(err)
+    finally:
+        emu.finish(signal.SIGTERM)
