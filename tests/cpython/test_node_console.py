@@ -7,7 +7,6 @@
 # CPython only (processes, pseudo-terminals); every wait is bounded.
 
 import json
-import os
 import signal
 import sys
 
@@ -55,6 +54,10 @@ def test_two_consoles_exchange_an_acknowledged_send_in_text(tmp_path):
             buoy.expect("error: send: usage: send DST TEXT")
             buoy.send("send diver x --priority 99")
             buoy.expect("error: send: --priority: 1 (most urgent) to 16, not 99")
+            buoy.send("send nobody hi")
+            buoy.expect("error: send: unknown node 'nobody' (give --known NAME=ID)")
+            buoy.send("send diver " + "x" * 200)  # more than a SeaTrac frame holds: refused by the link
+            assert buoy.expect("status acoustic") == "status acoustic 2 failed: 200 bytes exceed the acoustic MTU of 29"
             buoy.send("cancel 77")
             buoy.expect("error: cancel: no request 77 waiting on any link")
             buoy.send("help")

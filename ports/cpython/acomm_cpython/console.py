@@ -173,8 +173,9 @@ class Console:
         return usable[0]
 
     def _dst(self, name):
-        if name != BROADCAST and self.node.names.id_of(name) is None and not name.startswith("node-"):
-            raise ConsoleError("unknown node %r (give --known NAME=ID, or node-N)" % name)
+        # names come from --known (or a board's peers) and from nodes heard (node-N)
+        if name != BROADCAST and self.node.names.id_of(name) is None:
+            raise ConsoleError("unknown node %r (give --known NAME=ID)" % name)
         return name
 
     def cmd_send(self, words):
@@ -190,7 +191,8 @@ class Console:
         life = _lifespan(opts, self.lifespan_s)
         link = self._link_for(dst, opts)
         rid = self.node.next_req_id()
-        link.request(self.node.clock(), rid, dst, data, life, prio, ack)
+        if not link.request(self.node.clock(), rid, dst, data, life, prio, ack):
+            return  # refused: its final status (failed, with the reason) was printed
         self.out.emit({"event": "sent", "link": link.name, "id": rid, "dst": dst, "bytes": len(data),
                        "priority": prio, "ack": ack})
 
