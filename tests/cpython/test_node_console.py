@@ -151,6 +151,20 @@ def test_a_file_through_the_transport_and_ctrl_c_with_a_persistent_store(tmp_pat
         assert Transport(Node("buoy", 1), store=s).pending() == [2]
 
 
+def test_commands_from_a_pipe_are_waited_for(tmp_path):
+    # a script pipes commands in: at the end of its input the node waits
+    # for their final statuses, then exits 0 (the water's beacon 2 answers
+    # by itself, as a beacon in the water does)
+    with Water(tmp_path) as water:
+        rc, out, err = run(["node", "--name", "buoy", "--id", "1", "--known", "diver=2", "--modem",
+                            "seatrac:" + water.paths[0]], stdin="send diver are you there --ack\nrange diver\n")
+    assert rc == 0, err
+    lines = out.splitlines()
+    assert "end of input: waiting for 2 open requests to end (Ctrl-C leaves now)" in lines, lines
+    assert "status acoustic 1 delivered" in lines and lines[-1] == "stopped", lines
+    assert [ln for ln in lines if ln.startswith("range acoustic 2")] == ["range acoustic 2 diver 150.0 m"], lines
+
+
 def test_bad_input_gives_one_line_and_the_exit_status(tmp_path):
     cases = [
         (["--modem", "sonar:/dev/ttyUSB0"], 2, "unknown modem kind 'sonar'"),

@@ -23,7 +23,7 @@ from collections import deque
 
 from acomm.caps import CAP_RANGING
 from acomm.errors import AcommError
-from acomm.events import AVAILABLE, EV_AVAILABILITY, EV_PACKET, EV_PACKET_STATUS, EV_REFUSED
+from acomm.events import AVAILABLE, EV_AVAILABILITY, EV_PACKET, EV_PACKET_STATUS, EV_REFUSED, EV_STATUS
 from acomm.link import BROADCAST
 
 from .eventlines import as_dict
@@ -105,7 +105,11 @@ class Console:
         self.wheres = wheres or {}
         self.errors = deque(maxlen=_ERRORS_KEPT)
         self.heard = {}  # link name -> {node name: availability}, from the events
-        self._progress = {}  # packet id -> fragments acknowledged, last shown
+        self._progress = {}  # packet id -> (sent, acked) last shown
+        # what this console asked for and is not final yet: ("link", request
+        # id) and ("packet", packet id); the loop waits for them at the end
+        # of input
+        self.open = set()
         self._received = 0
         self.started = time.monotonic()
 
@@ -122,6 +126,9 @@ class Console:
             d["saved"] = self._save(ev[1], ev[3])
         if code == EV_PACKET_STATUS and d["final"]:
             self._progress.pop(ev[1], None)
+            self.open.discard(("packet", ev[1]))
+        if code == EV_STATUS and d["final"]:
+            self.open.discard(("link", ev[2]))
         if code == EV_REFUSED or (d.get("final") and d["status"] in ("failed", "expired")):
             self.errors.append("%s: %s" % (time.strftime("%H:%M:%S"), as_text_short(d)))
         self.out.emit(d)
@@ -193,6 +200,7 @@ class Console:
         rid = self.node.next_req_id()
         if not link.request(self.node.clock(), rid, dst, data, life, prio, ack):
             return  # refused: its final status (failed, with the reason) was printed
+        self.open.add(("link", rid))
         self.out.emit({"event": "sent", "link": link.name, "id": rid, "dst": dst, "bytes": len(data),
                        "priority": prio, "ack": ack})
 
@@ -209,6 +217,7 @@ class Console:
             data = f.read()
         pid = self.transport.send(self.node.clock(), dst, data, _lifespan(opts, _FILE_LIFESPAN_S), _priority(opts))
         self._progress[pid] = None
+        self.open.add(("packet", pid))
         self.out.emit({"event": "packet", "id": pid, "dst": dst, "bytes": len(data), "path": rest[1]})
 
     def cmd_range(self, words):
@@ -222,7 +231,8 @@ class Console:
         link = self._link_for(dst, opts, CAP_RANGING)
         rid = self.node.next_req_id()
         self.out.emit({"event": "ranging", "link": link.name, "id": rid, "dst": dst})
-        link.range(self.node.clock(), rid, [dst], self.lifespan_s)
+        if link.range(self.node.clock(), rid, [dst], self.lifespan_s) is not False:
+            self.open.add(("link", rid))
 
     def cmd_cancel(self, words):
         if len(words) != 1 or not words[0].isdigit():
@@ -256,6 +266,7 @@ class Console:
         if pid is None:
             raise ConsoleError("the transport refused it (see status)")
         self._progress[pid] = None
+        self.open.add(("packet", pid))
         self.out.emit({"event": "packet", "id": pid, "dst": dst, "what": what})
 
     def cmd_help(self, words):

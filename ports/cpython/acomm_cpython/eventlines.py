@@ -121,6 +121,9 @@ def as_text(d):
         return d["text"]
     if e in ("help", "report"):
         return "\n".join(d["lines"])
+    if e == "draining":
+        return "end of input: waiting for %d open request%s to end (Ctrl-C leaves now)" % (
+            d["open"], "" if d["open"] == 1 else "s")
     if e == "stopped":
         return "stopped%s" % _reason(d)
     return json.dumps(d)

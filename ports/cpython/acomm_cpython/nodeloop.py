@@ -75,23 +75,40 @@ def serve(tick, console, stdin_fd, seconds=None, poll=None, stop_at_eof=True):
     """Runs until the end of input (when stop_at_eof), `seconds`, Ctrl-C or SIGTERM; returns 0.
 
     tick(): one round of the node; poll(): called after it (the --send
-    list); console lines go to console.command()."""
+    list); console lines go to console.command(). At the end of input
+    (without `seconds`) it first waits for what the console asked for to
+    end (console.open: each ends by its lifespan at the latest), so a
+    script piping commands in gets their outcome."""
     old = signal.signal(signal.SIGTERM, _stop)
     reader = LineReader(stdin_fd) if stdin_fd is not None else None
     end = None if seconds is None else time.monotonic() + seconds
+    draining = False
+    reported = set()
     try:
         while end is None or time.monotonic() < end:
-            tick()
+            try:
+                tick()
+            except Exception as e:  # noqa: BLE001 - as on a board: the node keeps running, the store holds
+                kind = type(e).__name__
+                if kind not in reported:  # once per kind: a fault that repeats every step must not flood
+                    reported.add(kind)
+                    console.error("during a step: %s: %s (carrying on)" % (kind, e))
             console.poll()
             if poll is not None:
                 poll()
             if reader is None or reader.eof:
                 time.sleep(_STEP_S)
+                if reader is not None and stop_at_eof and end is None and not console.open:
+                    break
                 continue
             for line in reader.lines(_STEP_S):
                 console.command(line)
             if reader.eof and stop_at_eof and end is None:
-                break
+                if not console.open:
+                    break
+                if not draining:
+                    draining = True
+                    console.out.emit({"event": "draining", "open": len(console.open)})
     except KeyboardInterrupt:
         pass
     finally:
