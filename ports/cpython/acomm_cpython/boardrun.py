@@ -167,7 +167,7 @@ def main(args):
         print("acomm run: board %s: %s" % (name, e), file=sys.stderr)
         return 2
     except (ModemError, AcommError, OSError) as e:
-        print("acomm run: %s" % (e.strerror if isinstance(e, OSError) and e.strerror else e), file=sys.stderr)
+        print("acomm run: %s" % nodeloop.describe(e), file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 0

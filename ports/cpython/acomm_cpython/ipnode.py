@@ -219,7 +219,7 @@ def main(args):
         print("acomm node: %s" % e, file=sys.stderr)
         return 2
     except (ModemError, AcommError, OSError) as e:
-        print("acomm node: %s" % (e.strerror if isinstance(e, OSError) and e.strerror else e), file=sys.stderr)
+        print("acomm node: %s" % nodeloop.describe(e), file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 0  # during the start-up

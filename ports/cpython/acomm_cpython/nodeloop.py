@@ -116,6 +116,13 @@ def serve(tick, console, stdin_fd, seconds=None, poll=None, stop_at_eof=True):
     return 0
 
 
+def describe(e):
+    """One line for an error that ends a command: an OSError names its file and cause."""
+    if isinstance(e, OSError) and e.strerror:
+        return "%s: %s" % (e.filename, e.strerror) if e.filename else e.strerror
+    return str(e)
+
+
 def add_console_arguments(p):
     """The options `acomm node` and `acomm run` share: output, log, store, timing."""
     p.add_argument("--json", action="store_true", help="print events and answers as JSON lines (for scripts)")
