@@ -272,3 +272,12 @@ def test_an_evologics_modem_on_ethernet(tmp_path, scheme):
                 _no_traceback(err)
     finally:
         emu.finish(signal.SIGTERM)
+
+
+def test_a_node_and_a_board_drive_a_modem_with_the_same_class():
+    from acomm_cpython.modems import DRIVERS, make_driver
+    from acomm_mp.modems import MODEMS, driver_class
+
+    for kind in MODEMS:
+        assert type(make_driver(kind, 3)) is driver_class(kind), kind
+    assert set(DRIVERS) == set(MODEMS) | {"transparent"}

@@ -1,7 +1,11 @@
 # The real modems a CPython node can drive, and how `--modem` names them.
 #
 # One table of the core's sans-IO drivers (never the simulator's), used by
-# `acomm node`, `acomm bridge imc` and the quickstart's Python API:
+# `acomm node`, `acomm bridge imc` and the quickstart's Python API. The
+# modems a board can have come from the boards' own table
+# (acomm_mp.modems.MODEMS, which `acomm run` builds with), so a topside
+# node and a board drive a modem with the same class; this table adds what
+# a computer needs besides (default baud, medium) and the transparent pipe.
 #
 #   KIND:DEVICE[:BAUD]         a serial port: seatrac:/dev/ttyUSB0,
 #                              iridium:/dev/ttyUSB1:19200
@@ -14,16 +18,18 @@
 # busy or silent (ModemError, at run time).
 
 from acomm.errors import AcommError
+from acomm_mp.modems import MODEMS as BOARD_MODEMS
 
 # kind -> (driver module, class, default baud, medium, whether the driver
 # takes the modem's address as its first argument)
 DRIVERS = {
-    "seatrac": ("acomm.drivers.seatrac", "SeatracDriver", 115200, "acoustic", True),
-    "evologics": ("acomm.drivers.evologics", "EvologicsDriver", 19200, "acoustic", True),
-    "micromodem": ("acomm.drivers.micromodem", "MicroModemDriver", 19200, "acoustic", True),
-    "benthos": ("acomm.drivers.benthos", "BenthosDriver", 9600, "acoustic", True),
-    "iridium": ("acomm.drivers.iridium", "IridiumDriver", 19200, "satellite", True),
-    "sms": ("acomm.drivers.sms", "SmsDriver", 115200, "gsm", True),
+    "seatrac": BOARD_MODEMS["seatrac"] + (115200, "acoustic", True),
+    "evologics": BOARD_MODEMS["evologics"] + (19200, "acoustic", True),
+    "micromodem": BOARD_MODEMS["micromodem"] + (19200, "acoustic", True),
+    "benthos": BOARD_MODEMS["benthos"] + (9600, "acoustic", True),
+    "iridium": BOARD_MODEMS["iridium"] + (19200, "satellite", True),
+    "sms": BOARD_MODEMS["sms"] + (115200, "gsm", True),
+    # no address, no start-up: SLIP frames on a serial cable or radio
     "transparent": ("acomm.drivers.transparent", "TransparentDriver", 9600, "radio", False),
 }
 # the IMC bridge called the SMS modem "gsm" before this table existed
