@@ -52,7 +52,11 @@ def test_board_errors_are_named(tmp_path):
     shutil.copytree(DIVER, str(broken))
     text = (broken / "config.py").read_text().replace('"node_id": 2', '"node_id": 300')
     (broken / "config.py").write_text(text)
+    nomain = tmp_path / "nomain"
+    shutil.copytree(DIVER, str(nomain))
+    (nomain / "main.py").write_text("import sensors_we_do_not_have\n")
     cases = [
+        ([str(nomain), "--uart", "UART1=/dev/null"], "main.py does not run: ModuleNotFoundError"),
         ([DIVER, "--uart", "UART0=/dev/null"], "does not use UART0 (it uses UART1)"),
         ([DIVER], "give --uart UART1=DEVICE for its acoustic link (seatrac)"),
         ([DIVER, "--uart", "COM3"], "give UARTn=DEVICE[:BAUD]"),

@@ -62,6 +62,8 @@ def main_program(bdir):
     shim.start = start
     saved = sys.modules.get("acomm_mp.start")
     sys.modules["acomm_mp.start"] = shim
+    # as on the board, the board's own files import by name (import config)
+    sys.path.insert(0, os.path.abspath(bdir))
     try:
         with open(path) as f:
             code = compile(f.read(), path, "exec")
@@ -72,6 +74,8 @@ def main_program(bdir):
         raise FlashError("board %s: %s does not run: %s: %s" % (os.path.basename(os.path.normpath(bdir)), path,
                                                                type(e).__name__, e), 2)
     finally:
+        sys.path.remove(os.path.abspath(bdir))
+        sys.modules.pop("config", None)
         if saved is not None:
             sys.modules["acomm_mp.start"] = saved
         else:
