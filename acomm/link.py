@@ -274,6 +274,7 @@ class Link(Ranging):
 
     # -- cancellation -------------------------------------------------------------
     def cancel(self, now, req_id, reason="canceled"):
+        """-> True when the request was still open: its final status is then `canceled`."""
         req = self.queue.cancel(req_id)
         if req is not None:
             self._final(req, _CANCELED, reason)

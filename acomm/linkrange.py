@@ -25,6 +25,7 @@ MAX_LIFESPAN_MS = const(1 << 28)  # 3.1 days: the queue's wrap-safe horizon
 
 class Ranging:
     def range(self, now, req_id, names, lifespan_s, priority=2):
+        """Pings each node named; EV_RANGE_RECEIVED (metres, None where none answered), then a final status."""
         if not self.driver.caps.has(CAP_RANGING):
             return self._refuse(req_id, "%s cannot measure range" % self.name)
         if req_id in self._active:

@@ -27,6 +27,8 @@ _READS_PER_STEP = const(16)
 
 
 class Node:
+    """One system on the network: its name and id (0..254), links, name table; every event to listener(ev)."""
+
     def __init__(self, name, node_id, clock=None, names=None, listener=None):
         self.name = name
         self.node_id = node_id
@@ -71,6 +73,7 @@ class Node:
         link.guard = self.guard
 
     def add_link(self, name, driver, stream=None, **options):
+        """Adds a Link over the sans-IO driver, moving bytes to and from stream; -> the Link."""
         link = Link(name, driver, self.node_id, self.names, self._on_event, **options)
         if self.auth is not None:
             self._secure(link)
@@ -110,13 +113,13 @@ class Node:
         return ev
 
     def send(self, link_name, dst, data, lifespan_s, priority=10, ack=False, now=None):
-        # Convenience: a new request id and a transmission request on one link.
-        # Returns the request id (its statuses follow as events).
+        """One frame on one link (priority 1..16, 1 first) -> its request id; exactly one final status follows."""
         rid = self.next_req_id()
         self.links[link_name].request(self.clock() if now is None else now, rid, dst, data, lifespan_s, priority, ack)
         return rid
 
     def step(self, now=None):
+        """One round of work at `now` (default: the clock): transport, links, streams; -> now."""
         if now is None:
             now = self.clock()
         self._now = now

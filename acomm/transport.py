@@ -97,7 +97,7 @@ class Transport(Receiving):
 
     # -- the API ---------------------------------------------------------------
     def send(self, now, dst, data, lifespan_s, priority=10, medium=None):
-        # -> the packet id; raises AcommError for arguments that are wrong
+        """Stores a packet for dst -> its id; one final EV_PACKET_STATUS follows. AcommError for wrong arguments."""
         final = self.node.names.id_of(dst)
         if final is None or final == self.node.node_id:
             raise AcommError("no such destination %r" % (dst,))

@@ -168,6 +168,7 @@ class Catalog:
             m.encode_into(w, values)
 
     def pack(self, items):
+        """[(message, values dict), ...] -> bytes; EncodeError for a value outside its field."""
         items = list(items)
         need = 0
         for m, _ in items:
@@ -177,6 +178,7 @@ class Catalog:
         return w.getvalue()
 
     def unpack(self, buf, nbits=None):
+        """bytes -> [(message, values dict), ...]; DecodeError when they do not parse."""
         # Messages until only zero padding is left: fewer than 8 bits, all
         # zero. Anything else must parse as id + body; when it does not, the
         # DecodeError's `messages` holds what was decoded before it.

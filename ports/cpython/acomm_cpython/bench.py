@@ -115,5 +115,21 @@ def main(args):
     if only and names != ["footprint"]:
         print("--only is for the footprint bench", file=sys.stderr)
         return 2
-    run(names, emit, only)
+    if "footprint" in names:
+        from .boardfiles import in_checkout
+
+        if not in_checkout() and args.name == "all":
+            print("note: footprint skipped: it needs the firmware built in an acomm source checkout", file=sys.stderr)
+            names.remove("footprint")
+        elif not in_checkout():
+            # its figures come from firmware built from MicroPython's source
+            # with acomm frozen in (tools/firmware.py), which a wheel has not
+            print("acomm bench footprint: needs the firmware built in an acomm source checkout (make firmware "
+                  "there); an installed acomm has no firmware to measure", file=sys.stderr)
+            return 1
+    try:
+        run(names, emit, only)
+    except RuntimeError as e:  # a runtime the bench needs is missing: the message says which
+        print("acomm bench %s: %s" % (args.name, e), file=sys.stderr)
+        return 1
     return 0

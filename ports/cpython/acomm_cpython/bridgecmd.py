@@ -14,14 +14,14 @@ import sys
 import time
 
 from acomm.compat import ticks_diff, ticks_ms
+from acomm.errors import AcommError
 from acomm.node import Node
 
 from .imcbridge import ANNOUNCE_GROUP, DATA_PORT, ImcBridge
 from .imcgateway import ImcGateway
 from .ipnode import hostport, keyval
+from .modems import ModemError
 
-# the link's medium per modem kind: TransmissionRequest.comm_mean picks by it
-MEDIA = {"iridium": "satellite", "gsm": "gsm"}
 _SIM_STEP_MAX_MS = 1000  # simulated ms per loop round at most, so the sockets are read meanwhile
 
 
@@ -55,8 +55,9 @@ def add_arguments(p):
     r.add_argument("--name", help="this node's acomm name (and IMC system name)")
     r.add_argument("--id", type=int, help="this node's acomm id, 0..254")
     r.add_argument("--known", action="append", default=[], metavar="NAME=ID", help="another acomm node")
-    r.add_argument("--modem", action="append", default=[], metavar="KIND:DEVICE[:BAUD]|KIND:tcp:HOST:PORT",
-                   help="a modem link (seatrac, evologics, micromodem, benthos, iridium, gsm)")
+    r.add_argument("--modem", action="append", default=[], metavar="KIND:DEVICE[:BAUD]|KIND:tcp://HOST:PORT",
+                   help="a modem link (seatrac, evologics, micromodem, benthos, iridium, sms, transparent), "
+                        "as for acomm node")
 
 
 def _gateways(args, nodes):
@@ -93,23 +94,11 @@ def build_sim(args):
 
 
 def _modem_link(node, spec):
-    from acomm_sim.world import MODEMS
+    # the same drivers and --modem syntax as `acomm node` (acomm_cpython.modems)
+    # (the link is named after its medium: TransmissionRequest.comm_mean picks by it)
+    from .modems import add_modem_link
 
-    from .streams import TcpStream, open_serial
-
-    kind, _, where = spec.partition(":")
-    if kind not in MODEMS or not where:
-        raise ValueError("--modem %r: KIND:DEVICE[:BAUD] with KIND one of %s" % (spec, ", ".join(sorted(MODEMS))))
-    if where.startswith("tcp:"):
-        host, port = hostport(where[4:], "127.0.0.1")
-        stream = TcpStream(host, port)
-    else:
-        dev, _, baud = where.partition(":")
-        stream = open_serial(dev, int(baud) if baud else (115200 if kind == "seatrac" else 19200))
-    driver = MODEMS[kind][0](node.node_id, {})
-    medium = MEDIA.get(kind, "acoustic")
-    name = medium if medium not in node.links else "%s-%d" % (medium, len(node.links))
-    node.add_link(name, driver, stream, medium=medium)
+    add_modem_link(node, spec)
 
 
 def build_real(args):
@@ -131,7 +120,10 @@ def _stop(signum, frame):
 def main(args):
     try:
         nodes, advance, world = build_sim(args) if args.sim else build_real(args)
-    except (ValueError, OSError) as e:
+    except ModemError as e:
+        print("acomm bridge imc: %s" % e, file=sys.stderr)
+        return 1
+    except (ValueError, OSError, AcommError) as e:
         print("acomm bridge imc: %s" % e, file=sys.stderr)
         return 2
     gws = _gateways(args, nodes)

@@ -5,6 +5,9 @@ import sys
 
 def main(argv=None):
     p = argparse.ArgumentParser(prog="acomm", description="acomm: communication runtime for underwater and surface robot networks")
+    from acomm import __version__
+
+    p.add_argument("--version", action="version", version="acomm " + __version__)
     sub = p.add_subparsers(dest="cmd")
 
     b = sub.add_parser("bench", help="run a benchmark; prints JSON lines with --json")
@@ -38,15 +41,20 @@ def main(argv=None):
 
     fuzz.add_arguments(z)
 
-    n = sub.add_parser("node", help="a node on UDP and/or TCP links; prints events, sends stdin lines 'DST TEXT'")
+    n = sub.add_parser("node", help="a node on modems (--modem KIND:DEVICE), UDP and/or TCP, with a console on stdin")
     from . import ipnode
 
     ipnode.add_arguments(n)
 
-    r = sub.add_parser("replay", help="feed a capture (acomm emulate --log) through a driver and print its events")
+    rp = sub.add_parser("replay", help="feed a capture (acomm emulate --log) through a driver and print its events")
     from . import replay
 
-    replay.add_arguments(r)
+    replay.add_arguments(rp)
+
+    r = sub.add_parser("run", help="run a board's program (boards/NAME) on this computer, its UARTs on serial ports")
+    from . import boardrun
+
+    boardrun.add_arguments(r)
 
     args = p.parse_args(argv)
     if args.cmd == "bench":
@@ -67,6 +75,8 @@ def main(argv=None):
         return ipnode.main(args)
     if args.cmd == "replay":
         return replay.main(args)
+    if args.cmd == "run":
+        return boardrun.main(args)
     p.print_help()
     return 2
 

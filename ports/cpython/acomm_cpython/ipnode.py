@@ -1,24 +1,28 @@
-# `acomm node`: one acomm node on UDP and/or TCP links, on real time.
+# `acomm node`: one acomm node on the command line, on real time, with any
+# links: serial and Ethernet modems (--modem KIND:DEVICE, acomm_cpython.modems),
+# UDP and TCP. It runs the same drivers, link layer and store-and-forward
+# transport as the boards; --store DIR keeps the transport's packets on disk.
 #
-# It prints one line per event (received frames, availability, final
-# statuses), sends the --send messages at start, and each line typed on
-# standard input as "DESTINATION TEXT" ("*" for everyone; acknowledged when
-# unicast). The first lines say where each link listens, so a script can
-# start a client against a server bound to port 0.
+# On standard input it takes console commands (acomm_cpython.console: send,
+# file, range, cancel, status, help) and prints one line per event, or JSON
+# lines with --json. The first lines say where each IP link listens and
+# which modems are up, then "ready", so a script knows when to type.
+#
+# Exit status: 0 at the end (end of input, --seconds, Ctrl-C, SIGTERM); 2
+# for a usage error (a wrong --modem KIND, a bad key file); 1 when a modem
+# cannot be opened or does not answer its start-up.
 
-import select
 import sys
-import time
 
 from acomm.auth import Auth
 from acomm.errors import AcommError
-from acomm.events import (AVAILABLE, AVAIL_NAMES, EV_AVAILABILITY, EV_RECEIVED, EV_REFUSED, EV_STATUS, STATUS_NAMES,
-                          is_final)
+from acomm.events import AVAILABLE
 from acomm.link import BROADCAST
 from acomm.node import Node
 
-from .tcp import tcp_client_link, tcp_server_link
-from .udp import DEFAULT_GROUP, DEFAULT_PORT, udp_link
+from . import nodeloop
+from .modems import DRIVERS, ModemError, ModemSpecError
+from .udp import DEFAULT_GROUP, DEFAULT_PORT
 
 
 def hostport(text, default_host="0.0.0.0"):
@@ -48,40 +52,20 @@ def add_arguments(p):
     p.add_argument("--peer", action="append", default=[], metavar="ID=HOST:PORT", help="a static UDP peer")
     p.add_argument("--tcp-listen", metavar="[HOST:]PORT", help="a TCP server link")
     p.add_argument("--tcp-connect", metavar="HOST:PORT", help="a TCP client link")
-    p.add_argument("--advert-period", type=float, default=10.0, metavar="S", help="seconds between adverts")
-    p.add_argument("--send", action="append", default=[], metavar="DST=TEXT", help="send at start")
-    p.add_argument("--lifespan", type=float, default=30.0, metavar="S", help="lifespan of what is sent")
-    p.add_argument("--seconds", type=float, help="stop after this long (default: at the end of standard input)")
+    p.add_argument("--modem", action="append", default=[], metavar="KIND:DEVICE[:BAUD]",
+                   help="a modem link: KIND one of %s; DEVICE a serial port, tcp://HOST:PORT, "
+                        "socket://HOST:PORT or rfc2217://HOST:PORT (repeat for more links)" % ", ".join(sorted(DRIVERS)))
+    p.add_argument("--driver-option", action="append", default=[], metavar="KEY=VALUE",
+                   help="an option of the modems' drivers (docs/drivers.md), e.g. cmd_timeout_ms=3000")
+    p.add_argument("--advert-period", type=float, metavar="S",
+                   help="seconds between adverts (default 10 on IP links, 60 on modems)")
+    p.add_argument("--send", action="append", default=[], metavar="DST=TEXT",
+                   help="send at start, once DST has been heard")
+    nodeloop.add_console_arguments(p)
     p.add_argument("--key-file", metavar="PATH", help="the network key, 16 to 64 bytes as hex, in a file "
                    "(never on the command line, where ps shows it): frames are sealed and commands need a tag")
     p.add_argument("--tag-len", type=int, default=4, metavar="N", help="authentication tag bytes, 4..16 (default 4)")
     p.add_argument("--auth-counters", metavar="PATH", help="file keeping the authentication counters across restarts")
-
-
-def _print_event(ev):
-    code = ev[0]
-    if code == EV_RECEIVED:
-        line = "received %s %s -> %s: %s" % (ev[1].name, ev[2], ev[3], bytes(ev[4]).decode("utf-8", "replace"))
-    elif code == EV_AVAILABILITY:
-        line = "%s %s on %s" % ((AVAIL_NAMES[ev[3]] if 0 <= ev[3] < len(AVAIL_NAMES) else ev[3]), ev[2], ev[1].name)
-    elif code == EV_REFUSED:
-        line = "refused from %s: %s" % (ev[2], ev[3])
-    elif code == EV_STATUS and is_final(ev[3]):
-        line = "status %s %d %s%s" % (ev[1].name, ev[2], STATUS_NAMES[ev[3]], (": " + ev[4]) if ev[4] else "")
-    else:
-        return
-    print(line, flush=True)
-
-
-def _send(node, dst, text, lifespan):
-    # On the first link where dst has been heard (any link for "*").
-    # Returns False when no link reaches dst yet.
-    for name, link in node.links.items():
-        if dst == BROADCAST or link.availability(dst) == AVAILABLE:
-            rid = node.send(name, dst, text.encode("utf-8"), lifespan, ack=dst != BROADCAST)
-            print("sent %s %d to %s" % (name, rid, dst), flush=True)
-            return True
-    return False
 
 
 def load_key(path):
@@ -101,14 +85,14 @@ def load_key(path):
     return key
 
 
-def build(args):
-    node = Node(args.name, args.id, listener=_print_event)
-    if args.key_file is not None:
-        node.set_auth(Auth(load_key(args.key_file), args.tag_len, args.auth_counters))
-    for kv in args.known:
-        k, v = keyval(kv)
-        node.names.add(k, int(v))
-    period_ms = int(args.advert_period * 1000)
+
+
+def _ip_links(args, node, out):
+    # the UDP and TCP links asked for -> their ports
+    from .tcp import tcp_client_link, tcp_server_link
+    from .udp import udp_link
+
+    period_ms = int((args.advert_period or 10.0) * 1000)
     ports = []
     if args.udp is not None:
         gaddr, gport = hostport(args.group)
@@ -128,56 +112,122 @@ def build(args):
             advert_period_ms=period_ms,
         )
         ports.append(port)
-        print("udp on %s:%d" % port.address, flush=True)
+        out.emit({"event": "listening", "link": "udp", "text": "udp on %s:%d" % port.address})
     if args.tcp_listen is not None:
         link, port = tcp_server_link(node, "tcp", bind=hostport(args.tcp_listen), advert_period_ms=period_ms)
         ports.append(port)
-        print("tcp listening on %s:%d" % port.address, flush=True)
+        out.emit({"event": "listening", "link": "tcp", "text": "tcp listening on %s:%d" % port.address})
     if args.tcp_connect is not None:
         host, p = hostport(args.tcp_connect, "127.0.0.1")
         name = "tcp" if args.tcp_listen is None else "tcp-out"
         link, port = tcp_client_link(node, host, p, name, advert_period_ms=period_ms)
         ports.append(port)
-        print("tcp connecting to %s:%d" % (host, p), flush=True)
-    return node, ports
+        out.emit({"event": "listening", "link": name, "text": "tcp connecting to %s:%d" % (host, p)})
+    return ports
+
+
+def _modem_links(args, node):
+    # -> (streams, [(link name, kind, where, StartWatch)], {link: (kind, where)})
+    from .modems import add_modem_link, parse_spec
+
+    opts = {}
+    if args.advert_period is not None:
+        opts["advert_period_ms"] = int(args.advert_period * 1000)
+    from .emulate import parse_value
+
+    dopts = dict((k, parse_value(v)) for k, v in (keyval(kv) for kv in args.driver_option))
+    streams, watches, wheres = [], [], {}
+    for spec in args.modem:
+        kind, where, _ = parse_spec(spec)
+        name, stream, watch = add_modem_link(node, spec, options=dopts, **opts)
+        streams.append(stream)
+        watches.append((name, kind, where, watch))
+        wheres[name] = (kind, where)
+    return streams, watches, wheres
+
+
+def _send_when_heard(console, node, dst, text):
+    # a --send message: sent once a link has heard dst (any link for "*");
+    # -> False while none has
+    for link in node.links.values():
+        if dst == BROADCAST or link.availability(dst) == AVAILABLE:
+            console.command("send %s %s --link %s%s" % (dst, text, link.name, "" if dst == BROADCAST else " --ack"))
+            return True
+    return False
 
 
 def main(args):
-    if args.udp is None and args.tcp_listen is None and args.tcp_connect is None:
-        print("acomm node: give --udp, --tcp-listen and/or --tcp-connect", file=sys.stderr)
+    """`acomm node`: exit 0 at the end, 2 for a usage error, 1 when a link cannot be opened or started."""
+    from acomm.transport import Transport
+
+    from .console import Console
+    from .eventlines import Output
+
+    if args.udp is None and args.tcp_listen is None and args.tcp_connect is None and not args.modem:
+        print("acomm node: give --modem, --udp, --tcp-listen and/or --tcp-connect", file=sys.stderr)
         return 2
     try:
-        node, ports = build(args)
-    except AcommError as e:
+        for kv in args.send + args.known + args.driver_option:
+            keyval(kv)
+        from .modems import parse_spec
+
+        for spec in args.modem:
+            parse_spec(spec)
+        key = load_key(args.key_file) if args.key_file is not None else None
+        node = Node(args.name, args.id)
+        for kv in args.known:
+            k, v = keyval(kv)
+            node.names.add(k, int(v))
+        log = nodeloop.open_log(args.log)
+    except (AcommError, ValueError) as e:
         print("acomm node: %s" % e, file=sys.stderr)
         return 2
-    # --send messages wait until their destination has been heard
-    pending = [keyval(m) for m in args.send]
-    deadline = None if args.seconds is None else time.monotonic() + args.seconds
-    stdin_open = True
+    except OSError as e:
+        print("acomm node: --log %s: %s" % (args.log, e.strerror or e), file=sys.stderr)
+        return 2
+    out = Output(sys.stdout, args.json, log)
+    closers = []
     try:
-        while deadline is None or time.monotonic() < deadline:
-            node.step()
-            pending = [m for m in pending if not _send(node, m[0], m[1], args.lifespan)]
-            if not stdin_open:
-                time.sleep(0.005)
-                continue
-            if not select.select([sys.stdin], [], [], 0.005)[0]:
-                continue
-            line = sys.stdin.readline()
-            if not line:  # end of input: stop, unless running for --seconds
-                if deadline is None:
-                    break
-                stdin_open = False
-                continue
-            dst, _, text = line.strip().partition(" ")
-            if text and not _send(node, dst, text, args.lifespan):
-                print("no link has heard %s" % dst, flush=True)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        for p in ports:
-            p.close()
+        if key is not None:
+            node.set_auth(Auth(key, args.tag_len, args.auth_counters))
+        closers += _ip_links(args, node, out)
+        streams, watches, wheres = _modem_links(args, node)
+        closers += streams
+        store = nodeloop.open_store(args.store) if args.store else None
+        if store is not None:
+            closers.append(store)
+        transport = Transport(node, store=store)
+        if args.inbox:
+            import os
+
+            os.makedirs(args.inbox, exist_ok=True)
+        console = Console(node, transport, out, args.lifespan, args.inbox, wheres)
+        node.listener = console.on_event
+        nodeloop.wait_started(node.step, watches, out, args.startup_timeout)
+        out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
+        pending = [keyval(m) for m in args.send]
+
+        def send_pending():
+            pending[:] = [m for m in pending if not _send_when_heard(console, node, m[0], m[1])]
+
+        nodeloop.serve(node.step, console, sys.stdin.fileno(), args.seconds, send_pending)
         for dst, _ in pending:
-            print("not sent: %s was never heard" % dst, flush=True)
-    return 0
+            out.emit({"event": "error", "error": "not sent: %s was never heard" % dst})
+        out.emit({"event": "stopped"})
+        return 0
+    except ModemSpecError as e:
+        print("acomm node: %s" % e, file=sys.stderr)
+        return 2
+    except (ModemError, AcommError, OSError) as e:
+        print("acomm node: %s" % nodeloop.describe(e), file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 0  # during the start-up
+    finally:
+        for c in closers:
+            try:
+                c.close()
+            except OSError:
+                pass
+        if log is not None:
+            log.close()

@@ -158,6 +158,7 @@ class World:
 
     def add(self, name, node_id, modem, address=None, position=None, track=None, mac=None, link="acoustic",
             driver_opts=None, emu_opts=None, link_opts=None, listener=None):
+        """A node with its real driver on an emulated modem at position (x, y, depth) -> SimNode (.node, .events)."""
         addr = node_id if address is None else address
         driver = MODEMS[modem][0](addr, dict(driver_opts or {}))
         emu, host, dev = self.modem_ends(modem, addr, emu_opts, position)
@@ -343,7 +344,7 @@ class World:
         return first
 
     def run(self, ms, until=None):
-        # Runs `ms` of simulated time, or until until() is true (-> True).
+        """Runs `ms` of simulated time, or until until() is true (-> True)."""
         end = ticks_add(self.clock(), ms)
         for sn in self._order:
             sn.wake = None  # the caller may have given them work
