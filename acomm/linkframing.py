@@ -108,6 +108,8 @@ class LinkFraming:
         if f.flags & fr.F_AUTH:
             if self.auth is None:
                 raise AuthError("authenticated frame, and this node has no key")
-            f.payload = self.auth.open(f.ftype, src, dst, f.payload)[0]
+            # a modem reply is sealed before anyone asks for it (Link.set_reply):
+            # its tag covers the broadcast destination, whoever receives it
+            f.payload = self.auth.open(f.ftype, src, None if f.ftype == fr.REPLY else dst, f.payload)[0]
             f.authed = True
         return f, src, dst
