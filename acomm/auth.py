@@ -5,12 +5,14 @@
 #
 #     counter (3 bytes, big-endian)  tag (tag_len bytes, 4 by default)
 #
-# tag = HMAC-SHA256(key, 0x01 type src dst counter payload)[:tag_len], with
-# dst 255 for broadcast. The addresses and the frame type are covered
+# tag = HMAC-SHA256(key, 0x02 type src dst seq counter payload)[:tag_len],
+# with dst 255 for broadcast. The addresses and the frame type are covered
 # whether the link carries them in acomm's raw header or the modem carries
 # them (elided form), so a tag heard towards one node is no good towards
-# another. The sequence number and the other flags are not covered: a link
-# may resend a frame with them changed, and they move nothing.
+# another. The sequence number is covered too: the link's duplicate filter
+# goes by it, and a SEGMENT frame's lane, generation, poll and SACK bits
+# ride in it (acomm.segment), so a frame heard cannot be given another one.
+# The flags are not: a link resends a frame sealed afresh anyway.
 #
 # Replays: each sender numbers its frames 1, 2, ... (one counter for all
 # its links); a receiver keeps, per source, the highest counter it accepted
@@ -63,7 +65,7 @@ class Auth:
             self._load()
 
     # -- sending ---------------------------------------------------------------
-    def seal(self, ftype, src, dst, payload):
+    def seal(self, ftype, src, dst, payload, seq=0):
         # -> payload + counter + tag
         c = self._next
         if c > _CTR_MAX:
@@ -73,12 +75,12 @@ class Auth:
             self._save()
         self._next = c + 1
         ctr = bytes(((c >> 16) & 0xFF, (c >> 8) & 0xFF, c & 0xFF))
-        tag = self._tag(ftype, src, dst, ctr, payload)
+        tag = self._tag(ftype, src, dst, seq, ctr, payload)
         self.stats["sealed"] += 1
         return bytes(payload) + ctr + tag
 
     # -- receiving -------------------------------------------------------------
-    def open(self, ftype, src, dst, body):
+    def open(self, ftype, src, dst, body, seq=0):
         # -> (payload, counter); AuthError when the tag is wrong or the
         # counter was seen. Nothing is recorded until the tag verifies.
         n = len(body) - self.overhead
@@ -87,7 +89,7 @@ class Auth:
             raise AuthError("authenticated frame shorter than its counter and tag")
         mv = memoryview(body)
         ctr = mv[n : n + CTR_LEN]
-        if not same(self._tag(ftype, src, dst, ctr, mv[:n]), mv[n + CTR_LEN :]):
+        if not same(self._tag(ftype, src, dst, seq, ctr, mv[:n]), mv[n + CTR_LEN :]):
             self.stats["bad_tag"] += 1
             raise AuthError("authentication tag does not verify")
         c = (ctr[0] << 16) | (ctr[1] << 8) | ctr[2]
@@ -124,8 +126,8 @@ class Auth:
         st[1] = bits | (1 << back)
         return True
 
-    def _tag(self, ftype, src, dst, ctr, payload):
-        head = bytes((1, ftype & 0xFF, src & 0xFF, 255 if dst is None else dst & 0xFF))
+    def _tag(self, ftype, src, dst, seq, ctr, payload):
+        head = bytes((2, ftype & 0xFF, src & 0xFF, 255 if dst is None else dst & 0xFF, seq & 0xFF))
         return self._key.digest(head, ctr, payload)[: self.tag_len]
 
     # -- the counter file --------------------------------------------------------

@@ -74,7 +74,7 @@ class LinkFraming:
         # mean and they stay off the air.
         buf = self._buf
         if self.auth is not None:
-            payload = self.auth.seal(ftype, self.node_id, dst_id, payload)
+            payload = self.auth.seal(ftype, self.node_id, dst_id, payload, seq)
             flags |= fr.F_AUTH
         if self.elided:
             n = fr.encode_elided_into(buf, ftype, seq, payload, flags if self.link_acks else flags & fr.F_AUTH)
@@ -110,6 +110,7 @@ class LinkFraming:
                 raise AuthError("authenticated frame, and this node has no key")
             # a modem reply is sealed before anyone asks for it (Link.set_reply):
             # its tag covers the broadcast destination, whoever receives it
-            f.payload = self.auth.open(f.ftype, src, None if f.ftype == fr.REPLY else dst, f.payload)[0]
+            f.payload = self.auth.open(f.ftype, src, None if f.ftype == fr.REPLY else dst, f.payload,
+                                       f.seq)[0]
             f.authed = True
         return f, src, dst

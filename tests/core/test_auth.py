@@ -30,10 +30,11 @@ def test_a_sealed_payload_opens_and_any_change_is_refused():
     raises(AuthError, b.open, fr.DATA, 2, 3, body)  # heard towards another node
     raises(AuthError, b.open, fr.DATA, 4, 1, body)  # claimed by another sender
     raises(AuthError, b.open, fr.SEGMENT, 2, 1, body)
+    raises(AuthError, b.open, fr.DATA, 2, 1, body, 1)  # another sequence number
     raises(AuthError, Auth(b"another key of 16+ bytes").open, fr.DATA, 2, 1, body)
     raises(AuthError, b.open, fr.DATA, 2, 1, body[:6])
     assert b.open(fr.DATA, 2, 1, body)[0] == b"start"  # the genuine one still passes after all that
-    assert b.stats["bad_tag"] == len(body) + 4 and b.stats["opened"] == 2
+    assert b.stats["bad_tag"] == len(body) + 5 and b.stats["opened"] == 2
 
 
 def test_replays_are_refused_and_late_frames_inside_the_window_pass():
@@ -144,18 +145,21 @@ def test_tampered_and_replayed_frames_never_reach_the_application():
     _, genuine = _frame_to_auv(n, stop)
     link._on_rx(w.now(), 2, 1, genuine)  # as the modem hands it over
     assert [e[4] for e in _got(n["auv"], EV_RECEIVED)] == [stop]
-    # a recording played back later, with a fresh sequence number
+    # a recording played back later, past the link's duplicate filter
+    w.run(120000)
+    link._on_rx(w.now(), 2, 1, genuine)
+    assert auth.stats["replayed"] == 1
+    # and with a fresh sequence number, which the tag covers
     replay = bytearray(genuine)
     replay[0] = (replay[0] & 0xF0) | 9
-    w.run(120000)  # past the link's duplicate filter
     link._on_rx(w.now(), 2, 1, bytes(replay))
-    assert auth.stats["replayed"] == 1
+    assert auth.stats["bad_tag"] == 1
     # tampered: one bit of the command changed
     _, other = _frame_to_auv(n, seaware.encode(2, "rendezvous_on"))
     bad = bytearray(other)
     bad[3] ^= 1
     link._on_rx(w.now(), 2, 1, bytes(bad))
-    assert auth.stats["bad_tag"] == 1
+    assert auth.stats["bad_tag"] == 2
     # an unauthenticated copy of the same command: no tag at all
     plain = fr.encode_elided(fr.Frame(fr.DATA, 2, 1, 5, seaware.encode(2, "rendezvous_on")))
     link._on_rx(w.now(), 2, 1, plain)

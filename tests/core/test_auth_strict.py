@@ -134,8 +134,9 @@ def test_replays_and_tag_guesses_at_the_link():
     drv.receive(2, 1, sealed)
     link.poll(clk())
     clk.advance(120000)  # past the duplicate filter
+    drv.receive(2, 1, sealed)
     replay = bytearray(sealed)
-    replay[0] = (replay[0] & 0xF0) | 11  # another sequence number: not covered by the tag
+    replay[0] = (replay[0] & 0xF0) | 11  # another sequence number: the tag covers it
     drv.receive(2, 1, bytes(replay))
     # to another node: the same bytes towards node 3 do not verify there
     other = Link("acoustic", ScriptedDriver(CAP_ADDRESSING | CAP_BROADCAST), 3, link.names, None,
@@ -150,7 +151,7 @@ def test_replays_and_tag_guesses_at_the_link():
         link.poll(clk())
     link.poll(clk())
     assert [e[4] for e in rec.of(EV_RECEIVED)] == [b"once"]
-    assert link.framing.auth.stats["replayed"] == 1 and link.framing.auth.stats["bad_tag"] == 2000
+    assert link.framing.auth.stats["replayed"] == 1 and link.framing.auth.stats["bad_tag"] == 2001
     assert other.framing.auth.stats["bad_tag"] == 1 and other.stats["rx_bad"] == 1
 
 
@@ -274,3 +275,14 @@ def test_oversized_lengths_and_a_decompression_bomb_cost_nothing():
         t.on_segment(w.now(), link, 2, 1, h, b, authed)
         assert t.stats["rx_bad"] == 2 and not [e for e in auv.events if e[0] == EV_PACKET]
         assert sum(r.size for r in t._rx.values()) <= 2 * (t.max_packet + 16)
+
+
+def test_a_sealed_sack_cannot_be_turned_into_a_refusal():
+    # a bitmap SACK (base 0, one bitmap byte) and a refusal are both 2
+    # bytes; the C bit rides in the sequence field, which the tag covers
+    clk, drv, rec, link = _link()
+    head, body = sg.sack(0, 1, 0, b"\x02")
+    data = bytearray(_peer().encode(fr.SEGMENT, 1, head, body)[1])
+    data[0] |= 4  # C: complete / refused
+    link._on_rx(clk(), 2, 1, bytes(data))
+    assert link.framing.auth.stats["bad_tag"] == 1 and link.stats["rx_bad"] == 1
