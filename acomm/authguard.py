@@ -25,6 +25,7 @@
 # Each refusal is counted in `refused`, by kind. Open mode (strict=False)
 # is the behaviour before strict mode: only commands need a tag.
 
+from .auth import KEY_CMD
 from .errors import AcommError
 from .frame import ACK, ADVERT, REPLY, SEGMENT
 
@@ -98,9 +99,12 @@ class Guard:
             return True
         if authed:
             auth.commit()
+            auth.key_command(payload)  # a key rotation step is carried out here
         return authed
 
     def is_command(self, payload):
+        if payload[:2] == KEY_CMD:
+            return True
         for check in self.checks:
             try:
                 if check(payload):

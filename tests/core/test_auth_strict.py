@@ -151,7 +151,8 @@ def test_replays_and_tag_guesses_at_the_link():
         link.poll(clk())
     link.poll(clk())
     assert [e[4] for e in rec.of(EV_RECEIVED)] == [b"once"]
-    assert link.framing.auth.stats["replayed"] == 1 and link.framing.auth.stats["bad_tag"] == 2001
+    st = link.framing.auth.stats  # half the guesses name the key phase this node does not hold
+    assert st["replayed"] == 1 and st["bad_tag"] + st["no_key"] == 2001 and st["no_key"] > 900
     assert other.framing.auth.stats["bad_tag"] == 1 and other.stats["rx_bad"] == 1
 
 

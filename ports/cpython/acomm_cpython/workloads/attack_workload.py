@@ -491,3 +491,29 @@ def run(emit, open_mode=False):
         emit("attack_mode_open", 1, "flag")
     for k in f:
         emit(k, f[k], UNITS.get(k, "count"))
+    for k, v in frame_costs().items():
+        emit(k, v, "B")
+        emit(k.replace("auth_bytes_", "auth_airtime_80bps_"), v * 8 / 80, "s")
+
+
+def frame_costs():
+    # bytes on the air of the control frames, without and with the key
+    # (acomm.linkframing, as the links encode them); -> {name: bytes}
+    from acomm.linkframing import LinkFraming
+    from acomm.names import AddressMap
+
+    out = {}
+    for form, elided, link_acks in (("elided", True, False), ("elided_linkack", True, True), ("raw", False, True)):
+        for keyed in (False, True):
+            f = LinkFraming(1, elided, AddressMap(True, 0), 64, link_acks)
+            if keyed:
+                f.set_auth(Auth(KEY))
+            tag = "sealed" if keyed else "plain"
+            frames = (("sack_complete", fr.SEGMENT) + sg.sack_complete(0, 1, 3, 77),
+                      ("sack_bitmap", fr.SEGMENT) + sg.sack(0, 1, 3, b"\x05"),
+                      ("sack_refusal", fr.SEGMENT) + sg.sack_refused(0, 1, sg.REFUSE_FULL))
+            if link_acks:  # an acomm ACK goes on the air only where the modem does not acknowledge
+                frames = (("ack", fr.ACK, 5, b""),) + frames
+            for name, ftype, head, body in frames:
+                out["auth_bytes_%s_%s_%s" % (name, form, tag)] = len(f.encode(ftype, 2, head, body)[1])
+    return out
