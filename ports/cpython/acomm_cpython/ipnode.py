@@ -6,6 +6,7 @@
 # unicast). The first lines say where each link listens, so a script can
 # start a client against a server bound to port 0.
 
+import os
 import select
 import sys
 import time
@@ -86,7 +87,17 @@ def _send(node, dst, text, lifespan):
 
 def load_key(path):
     # -> the key bytes; AcommError naming the file and what is wrong with it
-    # (the key itself never appears in a message)
+    # (the key itself never appears in a message). As ssh does with a
+    # private key, a file that anyone but its owner may read or write is
+    # refused: the key may already be out.
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as e:
+        raise AcommError("key file %s: %s" % (path, e.strerror or e))
+    if mode & 0o077:
+        raise AcommError("key file %s: permissions %04o are too open: others than its owner can use it, so the key "
+                         "may be known already; make it the owner's only (chmod 600 %s), or take a new key"
+                         % (path, mode & 0o7777, path))
     try:
         with open(path) as f:
             text = f.read().strip()
