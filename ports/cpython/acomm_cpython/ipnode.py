@@ -57,12 +57,17 @@ def add_arguments(p):
                    "(never on the command line, where ps shows it): frames are sealed and commands need a tag")
     p.add_argument("--tag-len", type=int, default=4, metavar="N", help="authentication tag bytes, 4..16 (default 4)")
     p.add_argument("--auth-counters", metavar="PATH", help="file keeping the authentication counters across restarts")
+    p.add_argument("--auth-open", action="store_true",
+                   help="open mode: with the key, take control frames (acks, SACKs, adverts) without a tag, as "
+                        "before strict mode; anyone on the channel can then forge them (docs/wire-format.md)")
 
 
 def _print_event(ev):
     code = ev[0]
     if code == EV_RECEIVED:
         line = "received %s %s -> %s: %s" % (ev[1].name, ev[2], ev[3], bytes(ev[4]).decode("utf-8", "replace"))
+        if len(ev) > 5 and not ev[5]:
+            line += " (unauthenticated)"  # with a key: its frame had no valid tag
     elif code == EV_AVAILABILITY:
         line = "%s %s on %s" % ((AVAIL_NAMES[ev[3]] if 0 <= ev[3] < len(AVAIL_NAMES) else ev[3]), ev[2], ev[1].name)
     elif code == EV_REFUSED:
@@ -115,7 +120,7 @@ def load_key(path):
 def build(args):
     node = Node(args.name, args.id, listener=_print_event)
     if args.key_file is not None:
-        node.set_auth(Auth(load_key(args.key_file), args.tag_len, args.auth_counters))
+        node.set_auth(Auth(load_key(args.key_file), args.tag_len, args.auth_counters), strict=not args.auth_open)
     for kv in args.known:
         k, v = keyval(kv)
         node.names.add(k, int(v))
