@@ -252,7 +252,7 @@ class Attack:
 
     # -- legitimate traffic ------------------------------------------------------------
     def poll(self, now):
-        # every 40 s a packet between a pair; every 3 minutes a thrust command
+        # every 40 s a packet between a pair; every 80 s a thrust command
         r = self.rng
         src = NAMES[r.below(3)]
         dst = [n for n in NAMES if n != src][r.below(2)]
@@ -261,7 +261,7 @@ class Attack:
         size = r.range(6, 26) if r.chance(0.6) else r.range(40, 160)
         pid = self.sn[src].node.transport.send(now, dst, payload(seq, size), LIFESPAN_S, r.range(3, 12))
         led.sent(seq, ADDR[src], pid)
-        if (now // 40000) % 4 == 0:
+        if (now // 40000) % 2 == 0:
             self._command(now)
         return now + 40000
 
