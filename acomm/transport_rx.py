@@ -47,11 +47,11 @@ class Receiving:
             return
         key = (link.name, src, s.lane)
         g = self.node.guard
-        if g is not None and g.strict:
-            v = g.admits_segment(self._rx, key, s, authed)  # acomm.authguard: strict mode
-            if not v:
-                return
-            self._quiet = v == 2
+        # strict mode (acomm.authguard): 0 refused, 2 unsealed (taken, never answered)
+        v = 1 if g is None or not g.strict else g.admits_segment(self._rx, key, s, authed)
+        if not v:
+            return
+        self._quiet = v == 2
         if s.is_sack:
             self.stats["sacks"] += 1
             self._on_sack(now, link, src, s)
