@@ -169,6 +169,9 @@ class Auth:
     def seal(self, ftype, src, dst, payload, seq=0, announce=False):
         # -> payload + counter + tag; announce: the epoch rides along in the
         # clear (adverts: how peers learn a new epoch)
+        key = self._keys[self.phase]
+        if key is None:  # an add_key() key the port has not added again since the start
+            raise AcommError("auth: no key for phase %d, the one in use" % self.phase)
         c = self._next
         if c > _CTR_MAX:
             raise AcommError("auth counter exhausted: the network needs a new key")
@@ -178,7 +181,7 @@ class Auth:
         self._next = c + 1
         ctr = _b3(c | (_PHASE if self.phase else 0))
         ep = _b4(self.epoch)
-        tag = self._tag(self._keys[self.phase], ftype, src, dst, seq, ep, ctr, payload)
+        tag = self._tag(key, ftype, src, dst, seq, ep, ctr, payload)
         self.stats["sealed"] += 1
         if announce and self.epoch:
             return bytes(payload) + ctr + ep + (b"\x80\x00\x00" if self.phase else b"\x00\x00\x00") + tag
@@ -308,6 +311,9 @@ class Auth:
             # next is fresh to us; at most their last frames pass again,
             # which the layers above treat as duplicates)
             self._rx = {}
+            self.phase = 0
+            self._keys = [self._base, None]
+            self._nonces = [None, None]
             self.epoch = max(int(self.wall()), self.epoch + 1, 1)
             self._ann_end = ANNOUNCE_FRAMES
             self._next = 1
@@ -336,8 +342,8 @@ class Auth:
                 return False
         count = data[o]
         o += 1
-        if n != o + 8 * count:
-            return False
+        if n != o + 8 * count or dropped[data[3]]:
+            return False  # not whole, or the phase in use dropped
         self.phase = data[3]
         self.epoch = _u(data, 4, 4)
         self._reserved = _u(data, 8, 3)
@@ -348,8 +354,6 @@ class Auth:
                 self._keys[p] = HmacKey(self._base.digest(b"acomm key", nonces[p]))
             elif dropped[p]:
                 self._keys[p] = None
-        if self._keys[self.phase] is None:
-            return False
         for i in range(count):
             k = o + 8 * i
             self._rx[data[k]] = [_u(data, k + 5, 3), 0xFFFFFFFF, _u(data, k + 1, 4)]

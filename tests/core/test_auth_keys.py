@@ -153,3 +153,27 @@ def test_rotation_by_sealed_command_on_the_stack():
     w.run(20000)
     got = [e[4] for e in n["auv"].events if e[0] == EV_RECEIVED]
     assert got[-1] == b"on the new key" and auv.stats["opened"] >= 2
+
+
+def test_a_file_naming_a_dropped_key_in_use_is_damaged_and_an_added_key_is_added_again():
+    with TempDir() as d:
+        path = d.file("c.auth")
+        # phase 1 in use, phase 1 dropped: inconsistent, so a new epoch on the base key
+        with open(path, "wb") as f:
+            f.write(b"AK2\x01\x00\x00\x00\x05\x00\x00\x10\x00\x02\x00")
+        a = Auth(KEY, path=path, wall=lambda: 900)
+        assert a.epoch == 900 and a.phase == 0 and a._keys[1] is None
+        assert Auth(KEY).open(fr.ADVERT, 2, None, _advert(a))[0] == b"\x02\x01"
+        # an out-of-band key in use (flag 0 for phase 1): the file loads, and
+        # the node seals only once whoever loads it has added the key again
+        b = Auth(KEY, path=d.file("b.auth"), wall=lambda: 50)
+        b.add_key(KEY2, 1)
+        b.key_command(key_command(OP_USE, 1))
+        b2 = Auth(KEY, path=d.file("b.auth"))
+        assert b2.phase == 1 and b2.epoch == 50
+        raises(AcommError, b2.seal, fr.DATA, 2, 1, b"x")
+        b2.add_key(KEY2, 1)
+        peer = Auth(KEY)
+        peer.add_key(KEY2, 1)
+        peer.open(fr.ADVERT, 2, None, _advert(b2))
+        assert peer.open(fr.DATA, 2, 1, b2.seal(fr.DATA, 2, 1, b"y"))[0] == b"y"

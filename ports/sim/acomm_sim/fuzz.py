@@ -218,7 +218,8 @@ def all_targets(names=None, tmpdir=None):
     # one family does not build the others' corpora.
     from . import fuzz_control, fuzz_decoders, fuzz_drivers, fuzz_store
 
-    ts = fuzz_decoders.targets() + [fuzz_control.target()] + fuzz_drivers.targets() + fuzz_store.targets(tmpdir)
+    ts = (fuzz_decoders.targets() + [fuzz_control.target(), fuzz_control.file_target(tmpdir)] + fuzz_drivers.targets()
+          + fuzz_store.targets(tmpdir))
     if names:
         ts = [t for t in ts if t.name in names]
     return ts

@@ -147,3 +147,67 @@ def target():
             raise Failure("the address map moved on unsealed frames")
 
     return Target("control", _corpus(), run)
+
+
+def file_target(tmpdir):
+    # Target "auth.file": the counter file (acomm.auth) as power cuts and
+    # flash rot leave it. Corpus: files Auth wrote (derived and dropped key
+    # phases, sources with epochs). Oracle, beyond "only acomm errors": the
+    # node starts whatever the file holds (a damaged one means a new epoch),
+    # and then seals a frame that a peer holding its key phases opens.
+    import os
+
+    from acomm.auth import OP_DROP, OP_INSTALL, OP_USE, key_command
+
+    from .fuzz_decoders import Target
+
+    path = (tmpdir or ".") + "/fuzz-auth-file"
+    rng = Prng(307)
+    corpus = []
+    for i in range(12):
+        for p in (path, path + ".new"):
+            try:
+                os.remove(p)
+            except OSError:
+                pass
+        a = Auth(KEY, path=path, reserve=4, wall=lambda: 1000 + i)
+        peer = Auth(KEY)
+        nonce = rng.bytes(8)
+        for x in (a, peer):
+            if i % 3:
+                x.key_command(key_command(OP_INSTALL, 1, nonce))
+            if i % 3 == 2:
+                x.key_command(key_command(OP_USE, 1))
+        if i % 3 == 2:
+            a.key_command(key_command(OP_DROP, 0))
+        for k in range(rng.below(5)):
+            src = 2 + rng.below(20)
+            peer.epoch = rng.below(1 << 31)
+            a.open(fr.ADVERT, src, None, peer.seal(fr.ADVERT, src, None, b"\x02\x01", 0, True))
+        a.commit()
+        for _ in range(rng.below(9)):
+            a.seal(fr.DATA, 1, 2, b"x")
+        with open(path, "rb") as f:
+            corpus.append(f.read())
+
+    def run(data, rng):
+        for p in (path, path + ".new"):
+            try:
+                os.remove(p)
+            except OSError:
+                pass
+        with open(path if rng.chance(0.8) else path + ".new", "wb") as f:
+            f.write(data)
+        a = Auth(KEY, path=path, wall=lambda: 5000)
+        if a._keys[a.phase] is None:
+            if a.phase != 1 or a._nonces[1] is not None:
+                raise Failure("started with no key for the phase in use")
+            return  # an add_key() key: the port adds it again at start
+        body = a.seal(fr.DATA, 1, 2, b"after the start", 3, True)
+        peer = Auth(KEY)
+        if a._nonces[1] is not None:
+            peer.key_command(key_command(OP_INSTALL, 1, a._nonces[1]))
+        if peer.open(fr.DATA, 1, 2, body, 3)[0] != b"after the start":
+            raise Failure("a frame sealed after the start does not open")
+
+    return Target("auth.file", corpus, run)
