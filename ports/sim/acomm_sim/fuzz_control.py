@@ -161,7 +161,7 @@ def file_target(tmpdir):
 
     from .fuzz_decoders import Target
 
-    path = (tmpdir or ".") + "/fuzz-auth-file"
+    path = (tmpdir or "/tmp") + "/acomm-fuzz-auth-file"  # as fuzz_store does without a folder
     rng = Prng(307)
     corpus = []
     for i in range(12):
