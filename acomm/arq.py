@@ -173,6 +173,10 @@ class Reassembly:
         self.touched = now
         if self.done_pid is not None or index in self.frags:
             return
+        if index < 0:
+            # an index byte read as before the packet's start: garbage
+            # (complete() counts fragments, so it must never hold one)
+            raise DecodeError("fragment index %d" % index)
         if self.count is not None and index >= self.count:
             raise DecodeError("fragment %d of a %d-fragment packet" % (index, self.count))
         if self.size + len(payload) > self.max_bytes:

@@ -57,6 +57,7 @@ EV_REPLIED = const(8)
 # Link -> node/application events, passed to the listener as tuples:
 #   (EV_STATUS, link, req_id, status, reason)
 #   (EV_RECEIVED, link, src_name, dst_name, data)
+#   (EV_RECEIVED, link, src_name, dst_name, data, authed)   with a key
 #   (EV_AVAILABILITY, link, name, state)
 #   (EV_CAPS, link, caps)
 #   (EV_RANGE_RECEIVED, link, req_id, names, metres)
@@ -73,6 +74,8 @@ EV_SEGMENT = const(25)
 # Transport -> application:
 #   (EV_PACKET_STATUS, pid, status, reason)   statuses as for requests
 #   (EV_PACKET, src_name, dst_name, data)     a whole packet arrived
+#   (EV_PACKET, src_name, dst_name, data, authed)   the same, with a key:
+#                                             every fragment verified
 EV_PACKET_STATUS = const(26)
 EV_PACKET = const(27)
 # when the node has a key (acomm.auth) and a frame or packet without a valid

@@ -524,6 +524,15 @@ class Link(Ranging):
             # id: never hand it up as received
             self.stats["rx_own"] += 1
             return
+        g = self.guard
+        if g is not None and not f.authed and g.strict:
+            # strict mode (acomm.authguard): no control frame, and no node
+            # heard, on the word of a frame without a valid tag
+            if g.refuses_frame(f):
+                return
+            src_heard = None
+        else:
+            src_heard = src
         if f.ftype == fr.ADVERT:
             try:
                 nid, period = decode_advert(f.payload)
@@ -535,7 +544,7 @@ class Link(Ranging):
                 src = nid
             self._heard(src, now, period)
             return
-        self._heard(src, now)
+        self._heard(src_heard, now)
         mine = dst is None or dst == self.node_id
         if f.ftype == fr.SEGMENT:
             # the transport's: it numbers and acknowledges its own fragments
@@ -577,12 +586,7 @@ class Link(Ranging):
             self.stats["refused"] += 1
             self._emit((_EV_REFUSED, self, self.names.name_of(src), self.guard.REFUSED))
             return
-        self._emit(
-            (
-                _EV_RECEIVED,
-                self,
-                self.names.name_of(src),
-                BROADCAST if dst is None else self.names.name_of(dst),
-                f.payload,
-            )
-        )
+        ev = (_EV_RECEIVED, self, self.names.name_of(src), BROADCAST if dst is None else self.names.name_of(dst),
+              f.payload)
+        # with a key, whether the frame's tag verified
+        self._emit(ev if self.guard is None else ev + (f.authed,))

@@ -74,7 +74,11 @@ class LinkFraming:
         # mean and they stay off the air.
         buf = self._buf
         if self.auth is not None:
-            payload = self.auth.seal(ftype, self.node_id, dst_id, payload)
+            # adverts carry the sender's counter epoch (acomm.auth), and so
+            # do the first frames of a new one when they have room for it
+            a = self.auth
+            ann = ftype == fr.ADVERT or (a.announcing() and len(payload) + 7 <= self.mtu_for(dst_id))
+            payload = a.seal(ftype, self.node_id, dst_id, payload, seq, ann)
             flags |= fr.F_AUTH
         if self.elided:
             n = fr.encode_elided_into(buf, ftype, seq, payload, flags if self.link_acks else flags & fr.F_AUTH)
@@ -108,6 +112,9 @@ class LinkFraming:
         if f.flags & fr.F_AUTH:
             if self.auth is None:
                 raise AuthError("authenticated frame, and this node has no key")
-            f.payload = self.auth.open(f.ftype, src, dst, f.payload)[0]
+            # a modem reply is sealed before anyone asks for it (Link.set_reply):
+            # its tag covers the broadcast destination, whoever receives it
+            f.payload = self.auth.open(f.ftype, src, None if f.ftype == fr.REPLY else dst, f.payload,
+                                       f.seq)[0]
             f.authed = True
         return f, src, dst

@@ -55,14 +55,17 @@ class Node:
         self.transport = None
         self._now = 0
 
-    def set_auth(self, auth, guard=None):
+    def set_auth(self, auth, guard=None, strict=True):
         # A network key for every link, present and future (acomm.auth),
         # and what needs it (acomm.authguard; by default the seed
-        # catalogs' commands). None removes both.
+        # catalogs' commands, and in strict mode every control frame;
+        # strict=False is open mode). None removes both.
         if auth is not None and guard is None:
             from .authguard import commands
 
             guard = commands()
+        if guard is not None:
+            guard.strict = strict
         self.auth = auth
         self.guard = guard if auth is not None else None
         for name in self.links:

@@ -39,6 +39,7 @@ class Receiving:
         self._rx = {}  # (link name, src id, lane) -> Reassembly
         self._done = []  # (origin, pid) delivered here lately
         self._sacks = {}  # link request id -> (link, neighbour id, SACK bytes, tries)
+        self._quiet = False  # the segment at hand is unsealed, strict mode: no SACK for it
 
     def _rx_poll(self, now):
         for k in [k for k in self._rx if ticks_diff(now, self._rx[k].touched) > _RX_TIMEOUT_MS]:
@@ -50,11 +51,17 @@ class Receiving:
         except DecodeError:
             self.stats["rx_bad"] += 1
             return
+        key = (link.name, src, s.lane)
+        g = self.node.guard
+        # strict mode (acomm.authguard): 0 refused, 2 unsealed (taken, never answered)
+        v = 1 if g is None or not g.strict else g.admits_segment(self._rx, key, s, authed)
+        if not v:
+            return
+        self._quiet = v == 2
         if s.is_sack:
             self.stats["sacks"] += 1
             self._on_sack(now, link, src, s)
             return
-        key = (link.name, src, s.lane)
         r = self._rx.get(key)
         if not s.payload:
             self._answer_poll(now, link, src, s, r)
@@ -95,8 +102,10 @@ class Receiving:
         # the sender is still on the air with the rest of its round (half-
         # duplex: deaf), so its poll gets the refusal again, not "all
         # missing", which would have it send everything once more.
-        m = self._rx[key] = Reassembly(s.gen, 0, now)
+        m = Reassembly(s.gen, 0, now)
         m.refused = reason
+        m.unauthed = self._rx[key].unauthed
+        self._rx[key] = m
         self._sack(now, link, src, sg.sack_refused(s.lane, s.gen, reason))
 
     def _answer_poll(self, now, link, src, s, r):
@@ -164,7 +173,8 @@ class Receiving:
                 self._emit((_EV_REFUSED, None, names.name_of(origin), g.REFUSED))
             else:
                 self.stats["received"] += 1
-                self._emit((_EV_PACKET, names.name_of(origin), names.name_of(final), data))
+                ev = (_EV_PACKET, names.name_of(origin), names.name_of(final), data)
+                self._emit(ev if g is None else ev + (not r.unauthed,))
             # saved after the application has it: a power cut in between
             # gives at worst a second delivery, never a packet acknowledged
             # that nobody saw
@@ -196,6 +206,8 @@ class Receiving:
 
     def _sack(self, now, link, src, seg, tries=0):
         # seg: (head, bytes) from acomm.segment
+        if self._quiet and not tries:
+            return
         rid = self.node.next_req_id()
         if link.request(now, rid, self.node.names.name_of(src), seg[1], 60, _SACK_PRIORITY, False, None, SEGMENT,
                         seg[0]):

@@ -177,3 +177,14 @@ def test_a_receiver_that_lost_fragments_is_not_taken_for_complete():
     o.on_sack(sg.decode(*sg.sack(0, 1, 1)))  # only fragment 0 is there now
     assert not o.complete
     assert o.new_round() == [1]
+
+
+def test_an_index_byte_read_as_before_the_start_never_completes_a_packet():
+    # found by acomm fuzz (target control): on a new lane, base 0, index
+    # byte 255 unwraps to -1; with fragment 0 of a 2-fragment packet the
+    # reassembly held 2 fragments and took itself for complete
+    r = Reassembly(0, 1000, 0)
+    raises(DecodeError, r.add, r.index_of(255), b"x" * 10, 0)
+    hdr = sg.packet_header(7, 15)
+    r.add(0, hdr + b"a" * 6, 0)
+    assert r.count == 2 and not r.complete()

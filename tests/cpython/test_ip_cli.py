@@ -49,6 +49,7 @@ def test_node_command_needs_a_link():
 def test_two_nodes_with_the_same_key_file_talk_and_a_bad_key_file_is_named(tmp_path):
     key = tmp_path / "net.key"
     key.write_text("00112233445566778899aabbccddeeff\n")
+    key.chmod(0o600)
     srv = _node("--name", "topside", "--id", "1", "--tcp-listen", "127.0.0.1:0", "--seconds", "4",
                 "--key-file", str(key), "--auth-counters", str(tmp_path / "topside.ctr"))
     cli = None
@@ -71,7 +72,19 @@ def test_two_nodes_with_the_same_key_file_talk_and_a_bad_key_file_is_named(tmp_p
         path = tmp_path / ("k%d" % len(want))
         if text is not None:
             path.write_text(text)
+            path.chmod(0o600)
         p = _node("--name", "x", "--id", "1", "--udp", "127.0.0.1:0", "--key-file", str(path), "--seconds", "1")
         _, err = p.communicate(timeout=10)
         assert p.returncode == 2 and str(path) in err and want in err, err
         assert text is None or text not in err or text == "not hex at all"
+
+
+def test_a_key_file_others_can_read_is_refused_as_ssh_does(tmp_path):
+    path = tmp_path / "open.key"
+    path.write_text("00112233445566778899aabbccddeeff\n")
+    for mode in (0o644, 0o640, 0o604, 0o620):
+        path.chmod(mode)
+        p = _node("--name", "x", "--id", "1", "--udp", "127.0.0.1:0", "--key-file", str(path), "--seconds", "1")
+        _, err = p.communicate(timeout=10)
+        assert p.returncode == 2 and "too open" in err and "%04o" % mode in err and "chmod 600" in err, err
+        assert "0011223344" not in err

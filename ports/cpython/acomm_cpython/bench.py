@@ -30,8 +30,10 @@ BENCHES = {
     "compare": "compare_workload",
     # 24 simulated hours with faults: minutes of wall time, so not in `all`
     "soak": "soak_workload",
+    # an attacker without the key in the demo's ocean (--open: open mode)
+    "attack": "attack_workload",
 }
-NOT_IN_ALL = ("compare", "soak")
+NOT_IN_ALL = ("compare", "soak", "attack")
 
 
 def find_micropython():
@@ -75,7 +77,7 @@ def _workload_file(modname):
     return os.path.join(os.path.dirname(w.__file__), modname + ".py")
 
 
-def run(names, emit, only=None):
+def run(names, emit, only=None, open_mode=False):
     mp = find_micropython()
     for name in names:
         mod = _workload(name)
@@ -86,6 +88,8 @@ def run(names, emit, only=None):
 
         if only:
             mod.run(cp_emit, only=only)
+        elif open_mode:
+            mod.run(cp_emit, open_mode=True)
         else:
             mod.run(cp_emit)
         if not per_runtime:
@@ -127,8 +131,12 @@ def main(args):
             print("acomm bench footprint: needs the firmware built in an acomm source checkout (make firmware "
                   "there); an installed acomm has no firmware to measure", file=sys.stderr)
             return 1
+    open_mode = getattr(args, "open", False)
+    if open_mode and names != ["attack"]:
+        print("--open is for the attack bench", file=sys.stderr)
+        return 2
     try:
-        run(names, emit, only)
+        run(names, emit, only, open_mode)
     except RuntimeError as e:  # a runtime the bench needs is missing: the message says which
         print("acomm bench %s: %s" % (args.name, e), file=sys.stderr)
         return 1

@@ -15,6 +15,7 @@ def main(argv=None):
     b.add_argument("--json", action="store_true", help="one JSON object per line")
     b.add_argument("--only", help="footprint: one group of figures (frozen_cortex_m, romfs_cortex_m, mpy_cortex_m, "
                                   "frozen_i386, romfs_i386, mpy_i386, flash_text, unix64)")
+    b.add_argument("--open", action="store_true", help="attack: the nodes' key in open mode, to see what it allows")
 
     br = sub.add_parser("bridge", help="a gateway to another protocol: 'bridge imc' speaks IMC over UDP (DUNE, Neptus)")
     from . import bridgecmd

@@ -47,6 +47,8 @@ def as_dict(ev):
     if code == EV_RECEIVED:
         d = {"event": "received", "link": ev[1].name, "src": ev[2], "dst": ev[3]}
         d.update(payload_fields(ev[4]))
+        if len(ev) > 5:
+            d["authenticated"] = bool(ev[5])  # with a key: whether its frame's tag verified
         return d
     if code == EV_AVAILABILITY:
         return {"event": _name(ev[3], AVAIL_NAMES), "node": ev[2], "link": ev[1].name}
@@ -61,6 +63,8 @@ def as_dict(ev):
                 "final": is_final(ev[2])}
     if code == EV_PACKET:
         d = {"event": "packet_received", "src": ev[1], "dst": ev[2], "bytes": len(ev[3])}
+        if len(ev) > 4:
+            d["authenticated"] = bool(ev[4])
         caddy = caddy_messages(ev[3])
         if caddy:
             d["caddy"] = caddy
@@ -80,7 +84,8 @@ def as_text(d):
     e = d["event"]
     if e == "received":
         what = d["text"] if "text" in d else "%d bytes 0x%s" % (d["bytes"], d["hex"])
-        return "received %s %s -> %s: %s" % (d["link"], d["src"], d["dst"], what)
+        return "received %s %s -> %s: %s%s" % (d["link"], d["src"], d["dst"], what,
+                                               " (unauthenticated)" if d.get("authenticated") is False else "")
     if e in AVAIL_NAMES:
         return "%s %s on %s" % (e, d["node"], d["link"])
     if e == "status":

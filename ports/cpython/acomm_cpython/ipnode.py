@@ -12,6 +12,7 @@
 # for a usage error (a wrong --modem KIND, a bad key file); 1 when a modem
 # cannot be opened or does not answer its start-up.
 
+import os
 import sys
 
 from acomm.auth import Auth
@@ -66,11 +67,24 @@ def add_arguments(p):
                    "(never on the command line, where ps shows it): frames are sealed and commands need a tag")
     p.add_argument("--tag-len", type=int, default=4, metavar="N", help="authentication tag bytes, 4..16 (default 4)")
     p.add_argument("--auth-counters", metavar="PATH", help="file keeping the authentication counters across restarts")
+    p.add_argument("--auth-open", action="store_true",
+                   help="open mode: with the key, take control frames (acks, SACKs, adverts) without a tag, as "
+                        "before strict mode; anyone on the channel can then forge them (docs/wire-format.md)")
 
 
 def load_key(path):
     # -> the key bytes; AcommError naming the file and what is wrong with it
-    # (the key itself never appears in a message)
+    # (the key itself never appears in a message). As ssh does with a
+    # private key, a file that anyone but its owner may read or write is
+    # refused: the key may already be out.
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as e:
+        raise AcommError("key file %s: %s" % (path, e.strerror or e))
+    if mode & 0o077:
+        raise AcommError("key file %s: permissions %04o are too open: others than its owner can use it, so the key "
+                         "may be known already; make it the owner's only (chmod 600 %s), or take a new key"
+                         % (path, mode & 0o7777, path))
     try:
         with open(path) as f:
             text = f.read().strip()
@@ -189,7 +203,7 @@ def main(args):
     closers = []
     try:
         if key is not None:
-            node.set_auth(Auth(key, args.tag_len, args.auth_counters))
+            node.set_auth(Auth(key, args.tag_len, args.auth_counters), strict=not args.auth_open)
         closers += _ip_links(args, node, out)
         streams, watches, wheres = _modem_links(args, node)
         closers += streams

@@ -140,10 +140,14 @@ def input_of(target, rng):
     return mutate(rng, target.corpus)
 
 
-def run_case(target, seed, case):
-    # -> None, or (input bytes, description) when the case failed
+def run_case(target, seed, case, hook=None):
+    # -> None, or (input bytes, description) when the case failed. hook:
+    # None, or an object whose before() and after(target, data) bracket the
+    # case (acomm fuzz --corpus: what lines of acomm the input reached)
     rng = case_rng(seed, target.name, case)
     data = b""
+    if hook is not None:
+        hook.before()
     try:
         data = input_of(target, rng)
         target.run(data, rng)
@@ -153,6 +157,9 @@ def run_case(target, seed, case):
         return data, "oracle: %s" % (e,)
     except Exception as e:  # anything else is a decoder bug
         return data, "%s: %s" % (type(e).__name__, e)
+    finally:
+        if hook is not None:
+            hook.after(target, data)
     return None
 
 
@@ -165,19 +172,22 @@ class Result:
         self.ms = 0
 
 
-def run(targets, seed=1, ms=None, cases=None, on_failure=None, start=0):
+def run(targets, seed=1, ms=None, cases=None, on_failure=None, start=0, hook=None):
     # Runs the targets round robin, a batch of cases each turn, until `ms`
-    # (real milliseconds) have passed or each has run `cases` cases.
+    # (real milliseconds) have passed or each has run `cases` cases. With
+    # `ms`, each target's batch is sized to take about 50 ms, so every
+    # target gets the same share of the time (a decoder runs thousands of
+    # cases while a driver in a World runs tens). hook: see run_case.
     # -> [Result] in target order.
     results = [Result(t.name) for t in targets]
     t0 = _ms()
     nxt = [start] * len(targets)
-    batch = 50
+    batch = [50] * len(targets)
     while True:
         busy = False
         for i, t in enumerate(targets):
             r = results[i]
-            n = batch if cases is None else min(batch, cases - r.inputs)
+            n = batch[i] if cases is None else min(batch[i], cases - r.inputs)
             if n <= 0:
                 continue
             busy = True
@@ -185,7 +195,7 @@ def run(targets, seed=1, ms=None, cases=None, on_failure=None, start=0):
             for _ in range(n):
                 case = nxt[i]
                 nxt[i] += 1
-                bad = run_case(t, seed, case)
+                bad = run_case(t, seed, case, hook)
                 r.inputs += 1
                 if bad is not None:
                     r.failures += 1
@@ -193,7 +203,10 @@ def run(targets, seed=1, ms=None, cases=None, on_failure=None, start=0):
                         r.first.append((case, bad[0], bad[1]))
                     if on_failure is not None:
                         on_failure(t.name, case, bad[0], bad[1])
-            r.ms += _diff(_ms(), a)
+            took = _diff(_ms(), a)
+            r.ms += took
+            if cases is None:
+                batch[i] = max(10, min(20000, n * 50 // max(took, 1)))
             if ms is not None and _diff(_ms(), t0) >= ms:
                 return results
         if not busy:
@@ -203,9 +216,10 @@ def run(targets, seed=1, ms=None, cases=None, on_failure=None, start=0):
 def all_targets(names=None, tmpdir=None):
     # Every target, or those named. Imported here so a caller that fuzzes
     # one family does not build the others' corpora.
-    from . import fuzz_decoders, fuzz_drivers, fuzz_store
+    from . import fuzz_control, fuzz_decoders, fuzz_drivers, fuzz_store
 
-    ts = fuzz_decoders.targets() + fuzz_drivers.targets() + fuzz_store.targets(tmpdir)
+    ts = (fuzz_decoders.targets() + [fuzz_control.target(), fuzz_control.file_target(tmpdir)] + fuzz_drivers.targets()
+          + fuzz_store.targets(tmpdir))
     if names:
         ts = [t for t in ts if t.name in names]
     return ts

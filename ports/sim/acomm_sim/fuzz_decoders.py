@@ -254,7 +254,8 @@ def _imc_stream_target():
         sp = imc.StreamParser(cap)
 
         def feed(x):
-            return [p.msg.get("seq") for p in sp.feed(x) if p.msg.get("abbrev") == "UamTxFrame"]
+            # a packet of an id acomm does not know comes back with msg None
+            return [p.msg.get("seq") for p in sp.feed(x) if p.msg is not None and p.msg.get("abbrev") == "UamTxFrame"]
 
         feed(data)
         # a header that lies about its size may hold up to cap bytes

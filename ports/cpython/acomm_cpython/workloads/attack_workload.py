@@ -1,0 +1,384 @@
+# `acomm bench attack [--open]`: an attacker without the network key in the
+# demo's simulated ocean (docs/demo.md: buoy, diver and AUV on SeaTrac
+# beacons at the demo's places, the demo's loss curve, real drivers against
+# emulated beacons under a TDMA schedule; every node with a Transport and
+# the key, counters on file). The attacker (acomm_sim.attacker) is a
+# transceiver 30 m from the buoy that hears everything and sends SeaTrac
+# packets under any beacon id. Every 10 minutes the AUV goes out of range
+# for 150 s (so that what is sent to it then cannot arrive: a forgery that
+# makes it look delivered shows as such), and at minute 35 the AUV
+# restarts its key state (its Auth reloaded from its counter file, its
+# duplicate filter empty), as a reboot would.
+#
+# Legitimate traffic: transport packets between every pair (numbered,
+# acomm_sim.ledger), and from the buoy to the AUV acknowledged teleop thrust
+# commands on the link (each one distinct). Attacks, each tried many times:
+#
+#   ack             an ACK from the destination for every acknowledged
+#                   frame heard, at once
+#   sack_complete   a completion SACK (count, packet id read off fragment 0)
+#   sack_bitmap     a SACK saying every fragment of the window arrived
+#   sack_refusal    a refusal, "too big": the packet fails for good
+#   advert          an advert from the attacker's beacon claiming a node's
+#                   id: its traffic would go to the attacker
+#   replay_same     a sealed frame heard, again, to the same node, with
+#                   another sequence number (outside the tag)
+#   replay_other    a sealed frame heard, to another node
+#   replay_restart  sealed frames heard before the AUV's restart, after it
+#   tag_guess       a thrust command "from the buoy" with F_AUTH and a
+#                   random counter and tag
+#   flood           fragment 0s from 9 made-up sources on both lanes
+#   oversize        a fragment 0 announcing a 2 MiB packet, and a
+#                   compressed body announcing 1 MiB (decompression bomb)
+#
+# Figures per kind: attack_<kind>_tries and attack_<kind>_succeeded, where
+# success is what the attack is for: ack, a thrust command reported
+# delivered that the AUV never received; sack_complete, a packet reported
+# delivered that never arrived; sack_bitmap, a forged SACK taken as the
+# receiver's word on a live transfer; sack_refusal, a packet failed by a
+# refusal its receiver never sent; advert, a node's address map moved (the
+# bench puts it back so that the other attacks still have a network);
+# replay_* and tag_guess, a frame the key took for the second time
+# (or, for a guess, at all) and that reached an application again; flood, a legitimate sealed transfer refused
+# "receiver full"; oversize, a node that stopped (an exception out of its
+# step) or reassembly memory past its bound. Then the legitimate traffic:
+# packets lost and duplicated (the ledger's rules), commands lost.
+import os
+import shutil
+import tempfile
+
+from acomm import frame as fr
+from acomm import segment as sg
+from acomm.auth import Auth
+from acomm.catalog import teleop
+from acomm.events import (DELIVERED, EXPIRED, EV_PACKET, EV_PACKET_STATUS, EV_RECEIVED, EV_STATUS, FAILED, is_final)
+from acomm.dedup import DuplicateFilter
+from acomm.mac import Tdma
+from acomm.prng import Prng
+from acomm.transport import Transport
+from acomm.transport_rx import _MAX_RX
+from acomm_sim.attacker import Attacker
+from acomm_sim.channel import Channel
+from acomm_sim.ledger import Ledger
+from acomm_sim.world import World
+
+from ..demo.mission import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
+from .attack_eve import EVE, NAMES, Forger
+from .soak_workload import payload
+
+KEY = bytes(range(7, 39))  # the bench's network key (32 bytes)
+GUARD_MS = 300
+SLOTS = ((BUOY, 7000, GUARD_MS), (DIVER, 10000, GUARD_MS), (AUV, 7000, GUARD_MS))
+TX_MS = 3000
+EVE_AT = (25.0, 15.0, 3.0)
+FAR = (5000.0, 0.0, 6.0)  # the AUV out of range
+KINDS = ("ack", "sack_complete", "sack_bitmap", "sack_refusal", "advert", "replay_same", "replay_other",
+         "replay_restart", "tag_guess", "flood", "oversize")
+MINUTES = 60
+RESTART_MS = 35 * 60000
+LIFESPAN_S = 3000
+
+
+class Attack(Forger):
+    def __init__(self, strict=True, seed=1, minutes=MINUTES):
+        self.strict = strict
+        self.dir = tempfile.mkdtemp(prefix="acomm-attack-")
+        self.channel = Channel(seed=seed, loss_curve=LOSS_CURVE)
+        self.w = w = World(seed=seed, channel=self.channel, step_ms=20, max_quiet_ms=200)
+        self.minutes = minutes
+        self.rng = Prng(seed * 17 + 5)
+        self.ledger = Ledger()
+        self.tries = dict((k, 0) for k in KINDS)
+        self.won = dict((k, 0) for k in KINDS)
+        self.deaths = 0
+        self.strange = 0
+        self.first_copies = 0
+        self.taken_again = {}
+        self.handed = dict((ADDR[n], 0) for n in NAMES)  # deliveries to each application
+        self.sn = {}
+        for name in NAMES:
+            sn = w.add(name, ADDR[name], "seatrac", position=START[name], mac=Tdma(SLOTS, name, 0, TX_MS),
+                       link_opts={"advert_period_ms": 60000, "queue_capacity": 64, "max_retries": 100},
+                       listener=self._listener(name))
+            sn.node.set_auth(Auth(KEY, path=self._counters(name)), strict=strict)
+            Transport(sn.node, wall=lambda: w.now() // 1000)
+            sn.step = self._stepper(sn)
+            self.sn[name] = sn
+        self._spy_sacks()
+        self._spy_sealed()
+        self.eve = Attacker(self.channel, EVE, EVE_AT, self._heard)
+        self.recorded = []  # (src, dst, bytes) sealed frames heard, the latest 40
+        self.before_restart = []
+        self.pids = {}  # (src, dst, lane) -> (pid, count) read off a fragment 0
+        self.sack_turn = 0
+        self.out = []  # [when, src, dst, bytes, kind]: forged packets waiting for the channel
+        self.forged = {}  # (head, payload) of a forged SACK -> kind
+        self.commands = {}  # thrust payload -> [link request id, delivered?, times received]
+        self.cmd_rids = {}
+        self.cmd_seq = 0
+        self.restarted = False
+        self.far = False
+        self.max_rx_bytes = 0
+        self._m = -1
+        self._offset = 0
+        self.sealed_tries = {}  # (beacon, bytes) of a replay or a tag guess -> kind
+        self.busy_until = 0
+        self._check_adverts_at = None
+        self.refused_before = {}  # the AUV's refusals before its restart
+
+    def _counters(self, name):
+        return os.path.join(self.dir, name + ".auth")
+
+    # -- the nodes ------------------------------------------------------------------
+    def _stepper(self, sn):
+        node = sn.node
+
+        def step(now):
+            try:
+                node.step(now)
+            except Exception:  # a node that stopped: the oversize attack's aim
+                self.deaths += 1
+                self.won["oversize"] += 1
+        return step
+
+    def _listener(self, name):
+        me = ADDR[name]
+        led = self.ledger
+
+        def on_event(ev):
+            code = ev[0]
+            if code == EV_PACKET or code == EV_RECEIVED:
+                self.handed[me] += 1
+            if code == EV_PACKET_STATUS:
+                led.status(me, ev[1], ev[2])
+                if ev[2] == FAILED and "too big" in ev[3]:
+                    self.won["sack_refusal"] += 1
+            elif code == EV_PACKET:
+                data = ev[3]
+                if ev[2] != name or len(data) < 4:
+                    led.delivered(-1, False)
+                    return
+                seq = int.from_bytes(data[:4], "big")
+                led.delivered(seq, data == payload(seq, len(data)))
+            elif code == EV_RECEIVED:
+                c = self.commands.get(bytes(ev[4]))
+                if c is None or name != AUV:
+                    self.strange += 1  # a command nobody with the key sent, or at the wrong node
+                else:
+                    c[2] += 1
+            elif code == EV_STATUS and name == BUOY and is_final(ev[3]):
+                c = self.cmd_rids.pop(ev[2], None)
+                if c is not None:
+                    c[1] = ev[3] == DELIVERED
+                    c[3] = ev[3]
+        return on_event
+
+    def _spy_sacks(self):
+        # which forged SACKs a sender's transport took as its receiver's
+        # word (reached _on_sack with a live transfer), and which sealed
+        # transfers a receiver refused "receiver full"
+        for name in NAMES:
+            t = self.sn[name].node.transport
+            on_segment, send_sack = t.on_segment, t._sack
+
+            def spy(now, link, src, dst, head, data, authed=False, t=t, on_segment=on_segment):
+                kind = None if authed else self.forged.get((head, bytes(data)))
+                bad = t.stats["rx_bad"]
+                refused = sum(t.node.guard.refused.values())
+                on_segment(now, link, src, dst, head, data, authed)
+                if kind == "sack_bitmap" and t.stats["rx_bad"] == bad and sum(
+                        t.node.guard.refused.values()) == refused:
+                    self.won[kind] += 1
+                n = sum(r.size for r in t._rx.values())
+                self.max_rx_bytes = max(self.max_rx_bytes, n)
+                if len(t._rx) > _MAX_RX or n > _MAX_RX * (t.max_packet + 16):
+                    self.won["oversize"] += 1
+
+            def sack(now, link, src, seg, tries=0, send_sack=send_sack):
+                if src in ADDR.values() and seg[0] & 12 == 12 and len(seg[1]) == 2 and seg[1][1] == sg.REFUSE_FULL:
+                    self.won["flood"] += 1
+                send_sack(now, link, src, seg, tries)
+
+            t.on_segment = spy
+            t._sack = sack
+
+    def _spy_sealed(self):
+        # a replay or a guessed tag succeeds when the node's key takes it
+        # as fresh and genuine (its Auth opened it)
+        for name in NAMES:
+            link = self.sn[name].node.links["acoustic"]
+            on_rx = link._on_rx
+
+            seen = set()  # counter and tag of every sealed frame this node took
+
+            def spy(now, src_addr, dst_addr, data, link=link, on_rx=on_rx, me=ADDR[name], seen=seen):
+                kind = self.sealed_tries.get((me, bytes(data)))
+                auth = link.framing.auth
+                opened = auth.stats["opened"]
+                handed = self.handed[me]
+                on_rx(now, src_addr, dst_addr, data)
+                if auth.stats["opened"] == opened:
+                    return
+                sig = (src_addr, bytes(data[-7:]))
+                if kind is not None:
+                    if sig in seen:
+                        # taken twice by the key: the restart's window
+                        # (docs/wire-format.md); it succeeds when something
+                        # reached the application again (the transport's
+                        # own duplicate check stops a fragment's packet)
+                        self.taken_again[kind] = self.taken_again.get(kind, 0) + 1
+                        if self.handed[me] > handed:
+                            self.won[kind] += 1
+                    else:
+                        self.first_copies += 1  # the original never came: the attacker only delivered it
+                seen.add(sig)
+
+            link._on_rx = spy
+
+    # -- legitimate traffic ------------------------------------------------------------
+    def poll(self, now):
+        # every 40 s a packet between a pair; every 80 s a thrust command
+        r = self.rng
+        src = NAMES[r.below(3)]
+        dst = [n for n in NAMES if n != src][r.below(2)]
+        led = self.ledger
+        seq = led.begin(ADDR[src])
+        size = r.range(6, 26) if r.chance(0.6) else r.range(40, 160)
+        pid = self.sn[src].node.transport.send(now, dst, payload(seq, size), LIFESPAN_S, r.range(3, 12))
+        led.sent(seq, ADDR[src], pid)
+        if (now // 40000) % 2 == 0:
+            self._command(now)
+        return now + 40000
+
+    def _command(self, now):
+        i = self.cmd_seq
+        self.cmd_seq += 1
+        v = ((i % 41 - 20) / 20, (i // 41 % 41 - 20) / 20, 0, 0, 0, 0)
+        data = teleop.CATALOG.pack([(teleop.THRUST, teleop.thrust_values(v, i % teleop.SEQ_MOD))])
+        node = self.sn[BUOY].node
+        # a lifespan within the link's duplicate window (60 s): a resend
+        # later than that would be a new frame to the receiver (key or not)
+        rid = node.send("acoustic", AUV, data, 60, 2, ack=True, now=now)
+        c = self.commands.setdefault(data, [rid, False, 0, None])
+        self.cmd_rids[rid] = c
+
+    # -- the plan ------------------------------------------------------------------------
+    def _plan(self, now):
+        # the AUV's shadow, and its restart
+        t = now % 600000
+        far = 300000 <= t < 450000
+        if far != self.far:
+            self.far = far
+            pos = FAR if far else START[AUV]
+            self.channel.set_position(ADDR[AUV], pos[0], pos[1], pos[2])
+        if not self.restarted and now >= RESTART_MS:
+            self.restarted = True
+            self.before_restart = list(self.recorded)
+            node = self.sn[AUV].node
+            self.refused_before = dict(node.guard.refused)
+            node.set_auth(Auth(KEY, path=self._counters(AUV)), strict=self.strict)
+            node.links["acoustic"]._dups = DuplicateFilter(60000)
+
+    def run(self):
+        w = self.w
+        attack = self
+
+        class _Eve:
+            def poll(self, now):
+                attack._plan(now)
+                attack.attack(now)
+                return now + 100
+
+        w.add_task(self)
+        w.add_task(_Eve())
+        end = w.now() + self.minutes * 60000
+        while w.now() < end:
+            w.run(min(600000, end - w.now()))
+        w.remove_task(self)
+        self.channel.set_position(ADDR[AUV], START[AUV][0], START[AUV][1], START[AUV][2])
+        self.far = None
+        # the attacker stops too; the legitimate traffic drains
+        led = self.ledger
+        limit = w.now() + 2 * LIFESPAN_S * 1000
+        while (led.pending() or self.cmd_rids) and w.now() < limit:
+            w.run(600000, until=lambda: not led.pending() and not self.cmd_rids)
+        return self
+
+    def figures(self):
+        f = {}
+        for c in self.commands.values():
+            if c[1] and not c[2]:
+                self.won["ack"] += 1  # reported delivered, never received
+        lost = self.ledger.lost()
+        dups = self.ledger.counts["duplicates"]
+        self.won["sack_complete"] += lost  # accepted, reported delivered, never arrived (or lost)
+        for k in KINDS:
+            f["attack_%s_tries" % k] = self.tries[k]
+            f["attack_%s_succeeded" % k] = self.won[k]
+        f["attack_legit_packets_accepted"] = self.ledger.counts["accepted"]
+        f["attack_legit_packets_lost"] = lost
+        f["attack_legit_packets_duplicated"] = dups
+        f["attack_legit_packets_failed"] = self.ledger.counts["status_failed"]
+        f["attack_legit_commands_sent"] = len(self.commands)
+        f["attack_legit_commands_lost"] = sum(1 for c in self.commands.values() if not c[2] and c[3] not in (
+            EXPIRED, FAILED))
+        f["attack_legit_commands_expired_or_failed"] = sum(1 for c in self.commands.values() if c[3] in (EXPIRED, FAILED))
+        f["attack_legit_commands_duplicated"] = sum(c[2] - 1 for c in self.commands.values() if c[2] > 1)
+        f["attack_commands_not_sent_obeyed"] = self.strange
+        f["attack_replay_first_copies"] = self.first_copies
+        for k in sorted(self.taken_again):
+            f["attack_%s_frames_taken_again" % k] = self.taken_again[k]
+        f["attack_node_deaths"] = self.deaths
+        f["attack_max_reassembly_bytes"] = self.max_rx_bytes
+        refused = dict(self.refused_before)
+        for name in NAMES:
+            for k, v in self.sn[name].node.guard.refused.items():
+                refused[k] = refused.get(k, 0) + v
+        for k in sorted(refused):
+            f["attack_refused_" + k] = refused[k]
+        return f
+
+    def close(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+UNITS = {"attack_max_reassembly_bytes": "B"}
+
+
+def run(emit, open_mode=False):
+    a = Attack(strict=not open_mode)
+    try:
+        a.run()
+        f = a.figures()
+    finally:
+        a.close()
+    if open_mode:
+        emit("attack_mode_open", 1, "flag")
+    for k in f:
+        emit(k, f[k], UNITS.get(k, "count"))
+    for k, v in frame_costs().items():
+        emit(k, v, "B")
+        emit(k.replace("auth_bytes_", "auth_airtime_80bps_"), v * 8 / 80, "s")
+
+
+def frame_costs():
+    # bytes on the air of the control frames, without and with the key
+    # (acomm.linkframing, as the links encode them); -> {name: bytes}
+    from acomm.linkframing import LinkFraming
+    from acomm.names import AddressMap
+
+    out = {}
+    for form, elided, link_acks in (("elided", True, False), ("elided_linkack", True, True), ("raw", False, True)):
+        for keyed in (False, True):
+            f = LinkFraming(1, elided, AddressMap(True, 0), 64, link_acks)
+            if keyed:
+                f.set_auth(Auth(KEY))
+            tag = "sealed" if keyed else "plain"
+            frames = (("sack_complete", fr.SEGMENT) + sg.sack_complete(0, 1, 3, 77),
+                      ("sack_bitmap", fr.SEGMENT) + sg.sack(0, 1, 3, b"\x05"),
+                      ("sack_refusal", fr.SEGMENT) + sg.sack_refused(0, 1, sg.REFUSE_FULL))
+            if link_acks:  # an acomm ACK goes on the air only where the modem does not acknowledge
+                frames = (("ack", fr.ACK, 5, b""),) + frames
+            for name, ftype, head, body in frames:
+                out["auth_bytes_%s_%s_%s" % (name, form, tag)] = len(f.encode(ftype, 2, head, body)[1])
+    return out
