@@ -4,6 +4,10 @@
 #
 #   .venv/bin/python tools/mkbenchmarks.py [--out BENCHMARKS.md]
 #   .venv/bin/python tools/mkbenchmarks.py --render-only   # re-render the kept figures
+#   .venv/bin/acomm bench footprint --json > fp.jsonl
+#   .venv/bin/python tools/mkbenchmarks.py --render-only --footprint fp.jsonl
+#       # the kept figures, with the footprint section from that run (the
+#       # footprint bench alone takes about as long as the rest of compare)
 import argparse
 import os
 import platform
@@ -51,12 +55,18 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", default=os.path.join(ROOT, "BENCHMARKS.md"))
     ap.add_argument("--render-only", action="store_true", help="re-render the figures kept in --out")
+    ap.add_argument("--footprint", metavar="FILE",
+                    help="with --render-only: the footprint figures from this `acomm bench footprint --json` output")
     args = ap.parse_args()
     from acomm_cpython import benchmarks_md as bm
 
     if args.render_only:
         with open(args.out) as f:
             records, where = bm.figures_of(f.read())
+        if args.footprint:
+            with open(args.footprint) as f:
+                fresh = [("footprint_" + n, v, u) for n, v, u in bm.parse(f)]
+            records = [r for r in records if not r[0].startswith("footprint_")] + fresh
     else:
         records, where = bm.parse(run_bench()), machine()
     with open(args.out, "w") as f:

@@ -284,8 +284,10 @@ def render(records, machine):
     a("")
     a("## 5. Footprint on a microcontroller")
     a("")
-    a("From `acomm bench footprint` (the buoy board's program in the MicroPython unix port; "
-      "docs/micropython-port.md explains each figure), passed through as it comes. The peers have no "
+    a("From `acomm bench footprint` (the buoy board's program on 32-bit builds: MicroPython's qemu "
+      "Cortex-M3 firmware and the unix port built for i386; the `*_unix64_estimate_*` figures come from "
+      "the 64-bit unix port and understate a board; docs/micropython-port.md explains each figure), "
+      "passed through as it comes. The peers have no "
       "MicroPython port to compare with: imcpy and cbor2's fast path are C extensions for CPython, "
       "ltcodecs needs bitstring, msgpack and PyYAML.")
     a("")
