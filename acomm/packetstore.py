@@ -98,7 +98,7 @@ class StoredBlob:
     # then holds a record or two at a time, not the body joined from its
     # records and copied again behind the header: three allocations of the
     # packet's size, its largest, made when its heap is fragmented.
-    __slots__ = ("head", "store", "key", "at", "first", "chunk", "size")
+    __slots__ = ("head", "store", "key", "at", "chunk", "size")
 
     def __len__(self):
         return len(self.head) + self.size
@@ -116,7 +116,7 @@ class StoredBlob:
         end = off + n
         if end > self.size:
             end = self.size
-        first = self.first
+        first = self.chunk - self.at  # body bytes in chunk 0 (put() fills it)
         while off < end:
             if off < first:
                 i, a = 0, self.at + off
@@ -228,7 +228,6 @@ class PacketStore:
             return None
         b = StoredBlob()
         b.head, b.store, b.key, b.at, b.size, b.chunk = head, self.store, key, s.at, s.size, self.chunk
-        b.first = self.chunk - s.at
         return b
 
     def recover(self):

@@ -257,15 +257,13 @@ class Transport(Receiving):
         relay = None
         if p.relayed or p.final != hop:
             relay = (p.origin, p.final, p.prio, p.expiry - self.wall())
+        # a queued packet's body is in the store (_keep, _recover): the
+        # fragments are read back as they go
         head = sg.packet_header(p.pid, p.size, p.compressed, relay)
-        if p.body is not None:
-            blob = head + p.body
-        else:
-            # the body stays in the store; fragments are read as they go
-            blob = self.packets.blob(p.key, head)
-            if blob is None or len(blob) != len(head) + p.size:
-                self._final(now, p, _FAILED, "lost from the store")
-                return
+        blob = self.packets.blob(p.key, head)
+        if blob is None or len(blob) != len(head) + p.size:
+            self._final(now, p, _FAILED, "lost from the store")
+            return
         try:
             p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
         except ValueError as e:

@@ -62,6 +62,17 @@ def parse_value(text):
     return text
 
 
+def parse_options(pairs):
+    """--option KEY=VALUE lines -> {key: parse_value(value)}; ValueError names a line without '='."""
+    options = {}
+    for kv in pairs:
+        if "=" not in kv:
+            raise ValueError("--option wants KEY=VALUE, got %r" % kv)
+        k, v = kv.split("=", 1)
+        options[k.strip()] = parse_value(v.strip())
+    return options
+
+
 def parse_peer(text):
     # "ADDR" or "ADDR:PATH" or "ADDR:PATH:DISTANCE" ("ADDR::DISTANCE" headless)
     parts = text.split(":")
@@ -305,13 +316,11 @@ def add_arguments(p):
 
 
 def main(args):
-    options = {}
-    for kv in args.option:
-        if "=" not in kv:
-            print("--option wants KEY=VALUE, got %r" % kv, file=sys.stderr)
-            return 2
-        k, v = kv.split("=", 1)
-        options[k.strip()] = parse_value(v.strip())
+    try:
+        options = parse_options(args.option)
+    except ValueError as e:
+        print(e, file=sys.stderr)
+        return 2
     try:
         incoming = [bytes.fromhex(h) for h in args.mt]
     except ValueError:

@@ -105,7 +105,7 @@ def add_arguments(p):
 
 
 def main(args):
-    from .emulate import parse_value
+    from .emulate import parse_options
 
     try:
         with open(args.file, encoding="utf-8", errors="replace") as f:
@@ -116,13 +116,11 @@ def main(args):
     except CaptureError as e:
         print("%s:%d: damaged capture: %s" % (args.file, e.line, e.reason), file=sys.stderr)
         return 2
-    options = {}
-    for kv in args.option:
-        if "=" not in kv:
-            print("--option wants KEY=VALUE, got %r" % kv, file=sys.stderr)
-            return 2
-        k, v = kv.split("=", 1)
-        options[k.strip()] = parse_value(v.strip())
+    try:
+        options = parse_options(args.option)
+    except ValueError as e:
+        print(e, file=sys.stderr)
+        return 2
     name = args.driver or header.get("modem")
     try:
         driver = make_driver(name, args.address, options)
