@@ -69,7 +69,7 @@ EV_RANGE_RECEIVED = const(24)
 # Link -> transport (the node hands these to its transport, not to the
 # application): (EV_SEGMENT, link, src_id, dst_id or None, head, payload,
 # authed),
-# head: the frame header's sequence field (acomm.segment)
+# head: the frame header's sequence field (acomm.transport.segment)
 EV_SEGMENT = const(25)
 # Transport -> application:
 #   (EV_PACKET_STATUS, pid, status, reason)   statuses as for requests
@@ -78,7 +78,7 @@ EV_SEGMENT = const(25)
 #                                             every fragment verified
 EV_PACKET_STATUS = const(26)
 EV_PACKET = const(27)
-# when the node has a key (acomm.auth) and a frame or packet without a valid
-# tag holds a command (acomm.authguard): (EV_REFUSED, link or None,
+# when the node has a key (acomm.frame.auth) and a frame or packet without a valid
+# tag holds a command (acomm.link.guard): (EV_REFUSED, link or None,
 # src_name, reason); the command is not passed on
 EV_REFUSED = const(28)

@@ -5,7 +5,7 @@
 # asyncio with the node's clock (the ports use it on real time).
 #
 # A stream is any object with read(n) -> bytes or None/b"" when nothing is
-# waiting, and write(bytes): machine.UART, acomm.fakeuart.FakeUART, or the
+# waiting, and write(bytes): machine.UART, acomm_sim.fakeuart.FakeUART, or the
 # CPython port's serial and socket adapters. A port that moves whole frames
 # to and from endpoints (UDP, TCP: acomm.drivers.datagram) has pump(now)
 # instead: it feeds the driver what arrived and sends what the driver has,
@@ -14,7 +14,7 @@
 from .compat import const, ticks_ms
 from .events import is_final
 from .link import Link
-from .names import NameTable
+from .link.names import NameTable
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -41,7 +41,7 @@ class Node:
         self._pumps = {}  # link name -> the frame port's pump, or None
         self._unsent = {}  # link name -> bytes a short write left behind
         self._req_id = 0
-        self.auth = None  # acomm.auth.Auth: set_auth()
+        self.auth = None  # acomm.frame.auth.Auth: set_auth()
         self.guard = None
         # Without a listener, events wait here for the application to take
         # them; bounded: the oldest are dropped (and counted) beyond the cap.
@@ -56,14 +56,14 @@ class Node:
         self._now = 0
 
     def set_auth(self, auth, guard=None, strict=True):
-        # A network key for every link, present and future (acomm.auth),
-        # and what needs it (acomm.authguard; by default the seed
-        # catalogs' commands, and in strict mode every control frame;
-        # strict=False is open mode). None removes both.
+        """A network key (acomm.frame.auth.Auth) for every link, present and future, and the
+        command policy (an acomm.link.guard.Guard, e.g. acomm.apps.policy.commands()) of what
+        needs a valid tag. Without a guard only key commands need one; strict mode (default)
+        also refuses unsealed control frames, strict=False is open mode. auth=None removes both."""
         if auth is not None and guard is None:
-            from .authguard import commands
+            from .link.guard import Guard
 
-            guard = commands()
+            guard = Guard(())
         if guard is not None:
             guard.strict = strict
         self.auth = auth

@@ -18,7 +18,7 @@
 from ..codec.fields import Enum, Fixed, UInt
 from ..codec.message import Catalog, Message
 from ..compat import const
-from ..crc import crc16
+from ..codec.crc import crc16
 from ..errors import CRCError, DecodeError, EncodeError
 
 MAX_ADDR = const(127)

@@ -1,7 +1,4 @@
-# Schema-driven bit packing for acoustic links (docs/codec.md): field kinds,
-# messages with a small id, and catalogs that pack several messages into one
-# frame. `from acomm.codec import UInt, Fixed, Message, Catalog`.
-
-from .fields import Array, Bool, Bytes, Enum, Fixed, Nested, Optional, UInt, Wide
-from .message import Catalog, Message
-from .text6 import Text6
+# The codec layer: bit packing, checksums, authentication tags, forward
+# error correction, compression and the schema codec (fields, message,
+# text6). Empty on purpose: a board that needs a CRC must not load the
+# schema codec, so import the module you use (acomm.codec.fields, ...).

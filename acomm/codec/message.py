@@ -9,7 +9,7 @@
 
 import math
 
-from ..bits import BitReader, BitWriter
+from .bits import BitReader, BitWriter
 from ..errors import DecodeError, EncodeError
 from .fields import fail, pathed
 

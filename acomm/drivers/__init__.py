@@ -2,7 +2,7 @@
 # the device and the current time, and gives back bytes to write and events
 # (acomm.events EV_*). The interface every driver offers to acomm.link.Link:
 #
-#   caps                          acomm.caps.Capabilities
+#   caps                          acomm.drivers.caps.Capabilities
 #   broadcast_addr                interface address meaning "everyone"
 #   ready(now) -> bool            can start a new send or ping now
 #   send(now, addr, data, ack) -> handle    start transmitting one frame

@@ -15,7 +15,7 @@
 # One command is outstanding at a time; its owner is the start-up sequence
 # (benthos_config), the link's transaction (benthos_slot) or a keepalive.
 
-from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, Capabilities
+from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
 from ..events import EV_RX

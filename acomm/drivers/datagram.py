@@ -41,9 +41,9 @@
 # once, so the far end can route to us before we have anything to say.
 
 from .. import frame as fr
-from ..caps import CAP_BROADCAST, Capabilities
+from .caps import CAP_BROADCAST, Capabilities
 from ..compat import const, ticks_diff
-from ..discovery import encode_advert
+from ..link.discovery import encode_advert
 from ..errors import DecodeError, EncodeError
 from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_DONE, EV_TX_FAILED
 from .base import SansIO

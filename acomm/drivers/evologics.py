@@ -12,7 +12,7 @@
 # Notifications (RECV*, DELIVERED*, FAILED*, SEND*, ...) are told from
 # replies by their keyword, so they may arrive at any time.
 
-from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
 from . import evologics_rx as rx

@@ -28,7 +28,7 @@
 # and no ring alert for mailbox_check_ms, an empty session checks the
 # mailbox (seed 000 section IV.F).
 
-from ..caps import Capabilities
+from .caps import Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, EncodeError
 from . import iridium_wire as w

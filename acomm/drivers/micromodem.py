@@ -11,7 +11,7 @@
 #                      the link hands it over until its end (micromodem_slot).
 # Received frames, mini-packets and reboots arrive at any time in between.
 
-from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
 from ..events import EV_RX

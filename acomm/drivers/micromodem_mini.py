@@ -4,7 +4,7 @@
 # full packet at rate 0 takes about 4.7 s.
 #
 # The Link hands the driver an elided acomm ADVERT frame (acomm.frame,
-# acomm.discovery): 3 bytes
+# acomm.link.discovery): 3 bytes
 #     0 TTT SSSS   type ADVERT (2), no flags byte, 4-bit sequence
 #     node id
 #     advert period in units of 4 s (1..255)

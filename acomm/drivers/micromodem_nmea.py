@@ -15,7 +15,7 @@
 # Lines from the modem end in CR, LF or both; the host writes CR LF.
 
 from ..compat import const
-from ..crc import nmea_xor
+from ..codec.crc import nmea_xor
 from .lineframe import SyncLines
 
 _HEX = b"0123456789ABCDEF"

@@ -16,7 +16,7 @@
 # automatic reply to a DAT request: an interrogated node answers with data
 # without a transmission of its own (seed 003 section 6).
 
-from ..caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
 from . import seatrac_wire as w

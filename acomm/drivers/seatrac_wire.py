@@ -10,7 +10,7 @@
 # endian.
 
 from ..compat import const
-from ..crc import crc16
+from ..codec.crc import crc16
 from ..errors import EncodeError
 from .lineframe import SyncLines
 

@@ -21,7 +21,7 @@
 # list_period_ms; each is read (AT+CMGR), handed up, and deleted (AT+CMGD).
 # While the signal is 0 or unknown (99) nothing is sent (AtDriver).
 
-from ..caps import CAP_ADDRESSING, Capabilities
+from .caps import CAP_ADDRESSING, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, EncodeError
 from ..events import EV_RX, EV_TX_DONE, EV_TX_FAILED

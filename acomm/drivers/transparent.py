@@ -8,10 +8,10 @@
 # the link above sends raw acomm frames (addresses + CRC) and this driver only
 # delimits them with SLIP and models the time the bytes take on the line.
 
-from ..caps import CAP_BROADCAST, Capabilities
+from .caps import CAP_BROADCAST, Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_RX, EV_TX_DONE
-from ..slip import SlipDecoder, encode_into
+from ..frame.slip import SlipDecoder, encode_into
 from ..errors import EncodeError
 from .base import SansIO
 

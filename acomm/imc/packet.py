@@ -10,7 +10,7 @@
 # Only an unknown id *inside* a message is an error: nothing gives its size.
 
 from ..compat import const
-from ..crc import crc16
+from ..codec.crc import crc16
 from ..errors import CRCError, DecodeError, EncodeError
 from . import fp64
 from .messages import by_id, by_name

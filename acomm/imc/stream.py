@@ -17,7 +17,7 @@
 
 from .packet import check_frame, decode_checked
 from .wire import OVERHEAD, SYNC_BE, SYNC_LE, read_crc
-from ..crc import crc16
+from ..codec.crc import crc16
 from ..errors import DecodeError
 
 

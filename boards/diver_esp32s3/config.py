@@ -1,6 +1,6 @@
 # The diver's tablet: an ESP32-S3 in a housing with a SeaTrac X010 beacon on
 # UART1. It sends the diver's status every two minutes, alarms and chat
-# lines, and receives positions and commands (acomm.station). Packets for
+# lines, and receives positions and commands (acomm.apps.station). Packets for
 # shore go through the buoy, which forwards them over Iridium.
 CONFIG = {
     "name": "diver",
@@ -8,7 +8,7 @@ CONFIG = {
     "arch": "xtensawin",  # mpy-cross -march for the ESP32-S3
     "peers": {"buoy": 1, "shore": 3, "auv": 4},
     "routes": {"shore": "buoy"},
-    "storage": {"path": "/data/acomm.store", "capacity": 32768, "max_record": 256},
+    "storage": {"path": "/data/acomm.transport.store", "capacity": 32768, "max_record": 256},
     "max_packet": 2048,
     "watchdog_ms": 10000,
     "links": [

@@ -4,11 +4,11 @@
 # the checks every modem's fault tests make. Runs on CPython and MicroPython.
 # What is particular to one modem (its faults, its reasons, its timings)
 # stays in that modem's test file, which passes it in.
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.events import DELIVERED, EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RECEIVED, FAILED, TRANSMITTED, TRANSMITTING
-from acomm.fakeuart import uart_pair
+from acomm_sim.fakeuart import uart_pair
 from acomm.link import BROADCAST
-from acomm.names import AddressMap
+from acomm.link.names import AddressMap
 from acomm.node import Node
 from acomm_sim.medium import Medium
 from linkcheck import Recorder, check_exactly_one_final

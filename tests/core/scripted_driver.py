@@ -2,7 +2,7 @@
 # produces exactly the events the test asks for. Used to reach every state of
 # the link (modem acks, failures, ranging) without a modem.
 
-from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from acomm.events import EV_DELIVERED, EV_DRIVER_UP, EV_RANGE, EV_RX, EV_TX_DONE, EV_TX_FAILED
 
 MODEM_FLAGS = CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING

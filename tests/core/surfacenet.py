@@ -2,9 +2,9 @@
 # talking over FakeUART lines to their emulated modems, all on one clock and
 # one shared network (gateway or SMS centre), without a Link, so a test sees
 # every driver event and every byte. Runs on CPython and MicroPython.
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.events import DELIVERED
-from acomm.fakeuart import uart_pair
+from acomm_sim.fakeuart import uart_pair
 from acomm.prng import Prng
 from linkcheck import check_exactly_one_final
 

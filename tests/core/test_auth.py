@@ -1,4 +1,4 @@
-# Authenticated frames (acomm.auth, acomm.authguard): the tag and the replay
+# Authenticated frames (acomm.frame.auth, acomm.link.guard): the tag and the replay
 # window on their own, the counter file across restarts, and on the real
 # stack (SeaTrac nodes in a World): genuine commands are carried out, and
 # forged, tampered and replayed ones are refused and reported, never passed
@@ -6,7 +6,8 @@
 import os
 
 from acomm import frame as fr
-from acomm.auth import Auth
+from acomm.apps.policy import commands
+from acomm.frame.auth import Auth
 from acomm.catalog import caddy, seaware, teleop
 from acomm.errors import AcommError, AuthError
 from acomm.events import EV_RECEIVED, EV_REFUSED
@@ -99,7 +100,7 @@ def _net(key_for=("topside", "auv")):
     for name, nid, x in (("auv", 1, 0), ("topside", 2, 100), ("stranger", 3, 150)):
         nodes[name] = w.add(name, nid, "seatrac", position=(x, 0, 5), link_opts=QUIET)
     for name in key_for:
-        nodes[name].node.set_auth(Auth(KEY))
+        nodes[name].node.set_auth(Auth(KEY), commands())
     w.run(5000)
     return w, nodes
 
@@ -187,7 +188,7 @@ def test_a_command_in_a_transport_packet_needs_every_fragment_authenticated():
     for name in n:
         Transport(n[name].node, wall=wall)
     # an attacker sends its fragments without waiting for the lane probe
-    # of a node's first transfer (acomm.arq.Outgoing.probe), which it could
+    # of a node's first transfer (acomm.transport.arq.Outgoing.probe), which it could
     # not hear the answer to anyway
     n["stranger"].node.transport._gens[("acoustic", 1, 0)] = 1
     start = seaware.encode(2, "start_mission")

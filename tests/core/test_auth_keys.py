@@ -1,10 +1,11 @@
-# The key lifecycle (acomm.auth): a damaged or lost counter file starts a
+# The key lifecycle (acomm.frame.auth): a damaged or lost counter file starts a
 # new counter epoch instead of stopping the node, which peers take only
 # from a frame sealed under it, never from a recording; two keys (the
 # counter's phase bit) during a rotation; rotation by sealed command, on
 # the stack, and what a restart keeps of it.
 from acomm import frame as fr
-from acomm.auth import OP_DROP, OP_INSTALL, OP_USE, Auth, key_command
+from acomm.apps.policy import commands
+from acomm.frame.auth import OP_DROP, OP_INSTALL, OP_USE, Auth, key_command
 from acomm.errors import AcommError, AuthError
 from acomm.events import EV_RECEIVED, EV_REFUSED
 from acomm_sim.world import World
@@ -134,7 +135,7 @@ def test_rotation_by_sealed_command_on_the_stack():
     for name, nid, x in (("auv", 1, 0), ("topside", 2, 100), ("stranger", 3, 150)):
         n[name] = w.add(name, nid, "seatrac", position=(x, 0, 5), link_opts={"advert_period_ms": 600000})
     for name in ("auv", "topside"):
-        n[name].node.set_auth(Auth(KEY))
+        n[name].node.set_auth(Auth(KEY), commands())
     w.run(5000)
     auv = n["auv"].node.auth
     # from a node without the key: refused, and the auv keeps one key

@@ -1,4 +1,4 @@
-# Strict mode (acomm.authguard), the default with a network key: frames
+# Strict mode (acomm.link.guard), the default with a network key: frames
 # built by hand as an attacker without the key would put them on the air
 # (forged ACKs, SACKs of every kind, polls, adverts, modem replies,
 # fragment floods, oversized lengths, a decompression bomb, replays, tag
@@ -6,16 +6,17 @@
 # transport, and the same forgeries in open mode show what strict mode
 # stops. A genuine sealed frame of each kind still works.
 from acomm import frame as fr
-from acomm import segment as sg
-from acomm.auth import Auth
-from acomm.authguard import UNSEALED_RX, commands
-from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST
-from acomm.clock import ManualClock
+from acomm.transport import segment as sg
+from acomm.frame.auth import Auth
+from acomm.apps.policy import commands
+from acomm.link.guard import UNSEALED_RX
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST
+from acomm_sim.clock import ManualClock
 from acomm.events import (AVAILABLE, DELIVERED, EV_AVAILABILITY, EV_PACKET, EV_PACKET_STATUS, EV_RECEIVED, FAILED,
                           WAITING)
 from acomm.link import Link
-from acomm.linkframing import LinkFraming
-from acomm.names import AddressMap, NameTable
+from acomm.link.framing import LinkFraming
+from acomm.link.names import AddressMap, NameTable
 from acomm.prng import Prng
 from acomm.transport import Transport
 from acomm_sim.world import World
@@ -166,7 +167,7 @@ def _net(strict=True):
     nodes = {}
     for name, nid, x in (("auv", 1, 5000), ("topside", 2, 100)):
         nodes[name] = w.add(name, nid, "seatrac", position=(x, 0, 5), link_opts={"advert_period_ms": 600000})
-        nodes[name].node.set_auth(Auth(KEY), strict=strict)
+        nodes[name].node.set_auth(Auth(KEY), commands(), strict=strict)
         Transport(nodes[name].node, wall=lambda: w.now() // 1000)
     return w, nodes["topside"], nodes["auv"]
 
@@ -258,7 +259,7 @@ def test_an_unsealed_packet_is_delivered_marked_and_never_answered():
 
 
 def test_oversized_lengths_and_a_decompression_bomb_cost_nothing():
-    from acomm.compress import compress
+    from acomm.codec.compress import compress
 
     for authed in (False, True):
         w, top, auv = _net()

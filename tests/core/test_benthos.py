@@ -4,7 +4,7 @@
 # lines to emulated modems on one acoustic medium, through every fault mode.
 # The modem reports no delivery, so acknowledged sends are confirmed by the
 # links' own acomm acks in the elided frames.
-from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING
 from acomm.compat import TICKS_MAX
 from acomm.drivers import benthos_wire as w
 from acomm.drivers.benthos import BenthosDriver

@@ -1,7 +1,7 @@
-# Bit packing tests (acomm.bits). Plain functions with bare asserts: they run
+# Bit packing tests (acomm.codec.bits). Plain functions with bare asserts: they run
 # under pytest on CPython and under tools/mp_runtests.py on MicroPython.
 
-from acomm.bits import BitReader, BitWriter
+from acomm.codec.bits import BitReader, BitWriter
 from acomm.errors import DecodeError, EncodeError
 from acomm.prng import Prng
 from checks import raises as _raises

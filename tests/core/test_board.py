@@ -5,7 +5,7 @@
 # emulated modems with frames flowing, the main loop's tick survives
 # MemoryError and garbage, and machine.UART is normalised.
 from acomm.catalog import caddy
-from acomm.fakeuart import FakeUART
+from acomm_sim.fakeuart import FakeUART
 from acomm.prng import Prng
 from acomm_mp import start as mpstart
 from acomm_mp.assemble import build

@@ -4,7 +4,7 @@
 # table, round trips, the checksum and the status / command / alarm / chat
 # messages.
 
-from acomm.bits import BitReader, BitWriter
+from acomm.codec.bits import BitReader, BitWriter
 from acomm.catalog import caddy, load
 from acomm.errors import CRCError, DecodeError, EncodeError
 from acomm.prng import Prng

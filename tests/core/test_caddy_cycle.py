@@ -1,6 +1,6 @@
 # The CADDY interrogation cycle (seed 003 section 6) on the real stack: three
 # SeaTrac nodes in a simulated World (PlaDyPos and Buddy with USBL beacons,
-# the diver with a modem), each running acomm.interrogation, replies queued
+# the diver with a modem), each running acomm.apps.interrogation, replies queued
 # in the beacons, the third agent listening. Checks the order of the eight
 # transmissions on the channel, the cycle time against the seed's formula,
 # a lost reply that costs one timeout and nothing more, and Buddy's longer

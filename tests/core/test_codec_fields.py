@@ -3,8 +3,10 @@
 # codes on decode, and the 6-bit alphabet. Each field is driven through a
 # one-field Message, which is how fields are used.
 
-from acomm.bits import BitReader, BitWriter
-from acomm.codec import Array, Bool, Bytes, Enum, Fixed, Message, Nested, Optional, Text6, UInt, Wide
+from acomm.codec.bits import BitReader, BitWriter
+from acomm.codec.fields import Array, Bool, Bytes, Enum, Fixed, Nested, Optional, UInt, Wide
+from acomm.codec.message import Message
+from acomm.codec.text6 import Text6
 from acomm.codec import text6
 from acomm.codec.fields import width
 from acomm.errors import DecodeError, EncodeError

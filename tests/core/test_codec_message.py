@@ -3,8 +3,10 @@
 # rules, pack/unpack back to back, the padding rule, partial tails that keep
 # the messages before them, unknown ids, and random-bytes fuzzing.
 
-from acomm.bits import BitReader, BitWriter
-from acomm.codec import Array, Bool, Bytes, Catalog, Enum, Fixed, Message, Nested, Optional, Text6, UInt
+from acomm.codec.bits import BitReader, BitWriter
+from acomm.codec.fields import Array, Bool, Bytes, Enum, Fixed, Nested, Optional, UInt
+from acomm.codec.message import Catalog, Message
+from acomm.codec.text6 import Text6
 from acomm.errors import DecodeError, EncodeError
 from acomm.prng import Prng
 from checks import raises

@@ -1,4 +1,4 @@
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX, TICKS_PERIOD, const, micropython, ticks_add, ticks_diff, ticks_less, ticks_ms
 from acomm.errors import AcommError, CRCError, DecodeError, EncodeError
 from checks import raises

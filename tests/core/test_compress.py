@@ -1,4 +1,4 @@
-from acomm.compress import compress, decompress
+from acomm.codec.compress import compress, decompress
 from acomm.errors import DecodeError
 from acomm.prng import Prng
 

@@ -1,5 +1,5 @@
 from acomm import frame
-from acomm.crc import crc16, crc16_pure, nmea_xor
+from acomm.codec.crc import crc16, crc16_pure, nmea_xor
 from acomm.errors import DecodeError
 from acomm.prng import Prng
 
@@ -34,7 +34,7 @@ def test_fast_matches_pure_on_all_kinds_of_buffer():
 
 def test_imc_table_entry():
     # ref/imc.md: reflected table, entry [1] = 0xC0C1
-    from acomm.crc import _TABLE_LE
+    from acomm.codec.crc import _TABLE_LE
 
     assert _TABLE_LE[2] | _TABLE_LE[3] << 8 == 0xC0C1
 
@@ -42,7 +42,7 @@ def test_imc_table_entry():
 def test_the_written_out_table_is_the_polynomials():
     # the table is a constant in the source (it stays in a board's flash):
     # every entry must be what polynomial 0xA001 gives
-    from acomm.crc import _TABLE_LE
+    from acomm.codec.crc import _TABLE_LE
 
     assert len(_TABLE_LE) == 512
     for i in range(256):

@@ -2,7 +2,7 @@
 # routing by node id, learning senders, refusing garbage and impostors,
 # announcements, TCP-style connections, and two Nodes over a fake network.
 from acomm import frame as fr
-from acomm.discovery import decode_advert
+from acomm.link.discovery import decode_advert
 from acomm.drivers.datagram import DatagramDriver
 from acomm.errors import EncodeError
 from acomm.events import (

@@ -1,7 +1,7 @@
-from acomm.acktable import AckTable
+from acomm.link.acktable import AckTable
 from acomm.compat import TICKS_MAX, ticks_add
-from acomm.dedup import DuplicateFilter
-from acomm.txqueue import TxRequest
+from acomm.link.dedup import DuplicateFilter
+from acomm.link.txqueue import TxRequest
 
 
 def test_duplicates_within_window_only():

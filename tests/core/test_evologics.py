@@ -2,7 +2,7 @@
 # exchange of ref/modem-protocols.md section 2.6, the line reader on binary
 # payloads, then two Nodes whose Links drive EvologicsDrivers over FakeUART
 # lines to emulated modems on one acoustic medium, through every fault mode.
-from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
 from acomm.compat import TICKS_MAX
 from acomm.drivers import evologics_wire as w
 from acomm.drivers.evologics import EvologicsDriver

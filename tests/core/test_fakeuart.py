@@ -1,10 +1,10 @@
-# FakeUART tests (acomm.fakeuart). Plain functions with bare asserts: they run
+# FakeUART tests (acomm_sim.fakeuart). Plain functions with bare asserts: they run
 # under pytest on CPython and under tools/mp_runtests.py on MicroPython.
 # Time is a ManualClock: nothing here depends on the wall clock.
 
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX
-from acomm.fakeuart import FakeUART, uart_pair
+from acomm_sim.fakeuart import FakeUART, uart_pair
 
 
 def _bits_differing(a, b):

@@ -1,5 +1,5 @@
 from acomm.errors import CRCError, DecodeError, EncodeError
-from acomm.fec import ReedSolomon
+from acomm.codec.fec import ReedSolomon
 from acomm.prng import Prng
 
 NSYMS = (2, 4, 8, 16, 32)

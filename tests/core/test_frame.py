@@ -4,7 +4,7 @@
 import binascii
 
 from acomm import frame as F
-from acomm.crc import crc16
+from acomm.codec.crc import crc16
 from acomm.errors import CRCError, DecodeError, EncodeError
 from acomm.prng import Prng
 from checks import raises as _raises

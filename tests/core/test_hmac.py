@@ -1,6 +1,6 @@
-# acomm.hmacsha256 against the test vectors of RFC 4231 (HMAC-SHA256),
+# acomm.codec.hmacsha256 against the test vectors of RFC 4231 (HMAC-SHA256),
 # including the truncated tag of case 5 and the keys longer than a block.
-from acomm.hmacsha256 import HmacKey, hmac_sha256, same
+from acomm.codec.hmacsha256 import HmacKey, hmac_sha256, same
 
 
 def _h(s):

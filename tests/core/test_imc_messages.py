@@ -4,7 +4,7 @@
 import struct
 
 from acomm import imc
-from acomm.crc import crc16
+from acomm.codec.crc import crc16
 from acomm.errors import DecodeError, EncodeError
 from acomm.imc import enums, fp64, messages, wire
 from acomm.prng import Prng

@@ -5,7 +5,7 @@ import struct
 from binascii import unhexlify
 
 from acomm import imc
-from acomm.crc import crc16
+from acomm.codec.crc import crc16
 from acomm.errors import CRCError, DecodeError, EncodeError
 from acomm.imc import fp64
 from acomm.prng import Prng

@@ -1,10 +1,10 @@
-# acomm.interrogation: one node's view of a scripted interrogation cycle.
+# acomm.apps.interrogation: one node's view of a scripted interrogation cycle.
 # Each role (interrogator, responder, listener) moves on by what it
 # observes, a timeout moves anyone on, and a node that missed a step
 # catches up on the next frame it hears.
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.errors import AcommError
-from acomm.interrogation import Interrogation
+from acomm.apps.interrogation import Interrogation
 from checks import raises
 
 STEPS = (("p", "d"), ("b", "p"), ("b", "d"), ("p", "b"))

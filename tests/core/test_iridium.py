@@ -5,7 +5,7 @@
 # checks, failed sessions retried with back-off and given up, no signal, a
 # modem that stops answering or restarts, garbage; and Links and Nodes
 # end to end, with the transport on top.
-from acomm.caps import CAP_ADDRESSING
+from acomm.drivers.caps import CAP_ADDRESSING
 from acomm.drivers import iridium_wire as w
 from acomm.drivers.iridium import IridiumDriver
 from acomm.frame import RAW_OVERHEAD_WIDE, raw_overhead

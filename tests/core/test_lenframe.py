@@ -1,7 +1,7 @@
-# Length-prefixed framing (acomm.lenframe): the TCP links' stream format.
+# Length-prefixed framing (acomm.frame.lenframe): the TCP links' stream format.
 from acomm import frame
 from acomm.errors import DecodeError, EncodeError
-from acomm.lenframe import LenDecoder, append_frame
+from acomm.frame.lenframe import LenDecoder, append_frame
 from acomm.prng import Prng
 
 

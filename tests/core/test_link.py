@@ -1,7 +1,7 @@
 # The link API with a hand-driven modem driver: every primitive and status.
 from acomm import frame as fr
-from acomm.caps import CAP_DISCOVERY, CAP_RANGING, CAP_RELIABLE
-from acomm.clock import ManualClock
+from acomm.drivers.caps import CAP_DISCOVERY, CAP_RANGING, CAP_RELIABLE
+from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX
 from acomm.events import (
     AVAILABLE,
@@ -22,7 +22,7 @@ from acomm.events import (
 )
 from acomm.errors import EncodeError
 from acomm.link import BROADCAST, Link
-from acomm.names import NameTable
+from acomm.link.names import NameTable
 from linkcheck import Recorder, check_exactly_one_final
 from scripted_driver import MODEM_FLAGS, ScriptedDriver
 
@@ -118,7 +118,7 @@ def test_addressing_modem_without_acks_gets_link_acks():
     # A modem that addresses frames but never reports delivery (Benthos):
     # the elided frame asks for an ack in its flags byte, and the peer's
     # link answers with an elided ACK frame.
-    from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST
+    from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST
 
     clk, drv, rec, link = make(CAP_ADDRESSING | CAP_BROADCAST)
     assert link.mtu_for(2) == 30  # one header byte and the flags byte

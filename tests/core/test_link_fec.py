@@ -1,4 +1,4 @@
-# Reed-Solomon FEC on a link (acomm.linkframing, fec=N): on a channel that
+# Reed-Solomon FEC on a link (acomm.link.framing, fec=N): on a channel that
 # damages bytes, frames that would fail their CRC are repaired; without
 # FEC the same channel loses a third of them. Both ends on the seed 004
 # BPSK packet modem, which hands up damaged packets as they are.

@@ -1,8 +1,8 @@
-# Medium access (acomm.mac): the TDMA slot table and its guard, ALOHA's
+# Medium access (acomm.drivers.mac): the TDMA slot table and its guard, ALOHA's
 # random backoff, and the wrapper that gates a driver's ready() for the Link.
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.errors import AcommError
-from acomm.mac import Aloha, MacDriver, Tdma
+from acomm.drivers.mac import Aloha, MacDriver, Tdma
 from checks import raises
 from scripted_driver import ScriptedDriver
 

@@ -2,7 +2,7 @@
 # example exchanges of ref/modem-protocols.md section 3.7 (checksums
 # included), then two Nodes whose Links drive MicroModemDrivers over FakeUART
 # lines to emulated modems on one acoustic medium, through every fault mode.
-from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
 from acomm.compat import TICKS_MAX
 from acomm.drivers import micromodem_nmea as nm
 from acomm.drivers.micromodem import MicroModemDriver
@@ -259,7 +259,7 @@ def test_driver_asks_the_modem_its_address_and_sets_the_clock():
 # -- adverts as mini-packets ---------------------------------------------------------
 def test_advert_mini_packet_mapping():
     from acomm import frame as fr
-    from acomm.discovery import encode_advert
+    from acomm.link.discovery import encode_advert
 
     for seq in (0, 5, 15):
         for period_ms in (4000, 60000, 1020000):

@@ -3,7 +3,7 @@
 # frozen, where a dict would be built on the heap): each name sits at its
 # code.
 from acomm import events as ev
-from acomm import segment as sg
+from acomm.transport import segment as sg
 from acomm.drivers import iridium_wire, seatrac_wire
 
 

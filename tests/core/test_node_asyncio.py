@@ -5,7 +5,7 @@ import asyncio
 from acomm.compat import ticks_diff, ticks_ms
 from acomm.drivers.transparent import TransparentDriver
 from acomm.events import DELIVERED, EV_RECEIVED
-from acomm.fakeuart import uart_pair
+from acomm_sim.fakeuart import uart_pair
 from acomm.node import Node
 from linkcheck import Recorder
 

@@ -3,7 +3,7 @@
 # clock. Plain functions with bare asserts (pytest and mp_runtests.py).
 
 from acomm.catalog import rendezvous as R
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX
 from acomm.errors import DecodeError, EncodeError
 from acomm.prng import Prng

@@ -2,7 +2,7 @@
 # exchanges of ref/modem-protocols.md section 1 (CRCs included), then two
 # Nodes whose Links drive SeatracDrivers over FakeUART lines to emulated
 # beacons on one acoustic medium, through every fault mode.
-from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.drivers import seatrac_wire as w
 from acomm.drivers.seatrac import SeatracDriver

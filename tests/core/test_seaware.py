@@ -3,7 +3,7 @@
 # MicroPython.
 
 from acomm.catalog import seaware as S
-from acomm.crc import crc16
+from acomm.codec.crc import crc16
 from acomm.errors import CRCError, DecodeError, EncodeError
 from acomm.prng import Prng
 from checks import raises

@@ -2,8 +2,8 @@
 # acks, noise, discovery among three nodes, and the final-status rule under
 # loss, corruption and cancellation.
 from acomm import frame as fr
-from acomm import slip
-from acomm.clock import ManualClock
+from acomm.frame import slip
+from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX
 from acomm.drivers.transparent import TransparentDriver
 from acomm.events import (
@@ -16,7 +16,7 @@ from acomm.events import (
     UNAVAILABLE,
     is_final,
 )
-from acomm.fakeuart import uart_bus, uart_pair
+from acomm_sim.fakeuart import uart_bus, uart_pair
 from acomm.link import BROADCAST
 from acomm.node import Node
 from acomm.prng import Prng

@@ -1,6 +1,7 @@
-from acomm import frame, slip
+from acomm import frame
+from acomm.frame import slip
 from acomm.errors import DecodeError, EncodeError
-from acomm.fakeuart import uart_pair
+from acomm_sim.fakeuart import uart_pair
 from acomm.prng import Prng
 
 

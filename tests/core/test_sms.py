@@ -4,7 +4,7 @@
 # emulated modems through one emulated SMS centre over FakeUART: +CMTI and
 # polling, unknown senders, full storage, +CMS errors, no signal, garbage,
 # a modem that stops answering or restarts; and Links and Nodes end to end.
-from acomm.caps import CAP_ADDRESSING
+from acomm.drivers.caps import CAP_ADDRESSING
 from acomm.drivers import sms_pdu as pdu
 from acomm.drivers import sms_wire as w
 from acomm.drivers.sms import SmsDriver

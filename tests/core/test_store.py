@@ -1,4 +1,4 @@
-# acomm.store on real files, on both runtimes. Each test works in its own
+# acomm.transport.store on real files, on both runtimes. Each test works in its own
 # folder under /tmp and removes it, whatever happens.
 
 import os
@@ -6,10 +6,10 @@ from collections import OrderedDict
 
 from checks import TempDir, raises, skip
 
-from acomm.crc32 import crc32, crc32_pure
+from acomm.codec.crc32 import crc32, crc32_pure
 from acomm.errors import AcommError, EncodeError, StoreError, StoreFull
 from acomm.prng import Prng
-from acomm.store import MAGIC, Store
+from acomm.transport.store import MAGIC, Store
 
 HDR = len(MAGIC)
 

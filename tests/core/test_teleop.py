@@ -3,7 +3,7 @@
 # clock that crosses the 2**30 tick wrap. Plain functions, bare asserts.
 
 from acomm.catalog import teleop as T
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX
 from acomm.errors import DecodeError, EncodeError
 from acomm.prng import Prng

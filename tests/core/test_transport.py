@@ -1,10 +1,10 @@
-# The transport (acomm.transport, acomm.arq, acomm.segment) on the real
+# The transport (acomm.transport, acomm.transport.arq, acomm.transport.segment) on the real
 # stack: SeaTrac nodes in a simulated World. Fragmentation and reassembly,
 # selective repeat under loss, a relay over two hops, priorities on two
 # lanes, expiry, recovery from the store after a restart, and the segment
 # codec's refusals of bad input.
-from acomm import segment as sg
-from acomm.arq import Outgoing, Reassembly
+from acomm.transport import segment as sg
+from acomm.transport.arq import Outgoing, Reassembly
 from acomm.errors import DecodeError
 from acomm.events import DELIVERED, EXPIRED, QUEUED, TRANSMITTED
 from acomm.prng import Prng
@@ -165,8 +165,8 @@ def test_a_receiver_that_lost_fragments_is_not_taken_for_complete():
     # out (or it restarted); fragment 0 arrives alone and its SACK says
     # base 1 with nothing after it: fragment 1 must go again, not the
     # packet be reported delivered
-    from acomm import segment as sg
-    from acomm.arq import Outgoing
+    from acomm.transport import segment as sg
+    from acomm.transport.arq import Outgoing
 
     o = Outgoing(bytes(50), 28, 0, 1, 7)
     assert o.count == 2

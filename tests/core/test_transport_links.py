@@ -1,10 +1,10 @@
-# The transport's link choice (acomm.route): acoustic before a costly
+# The transport's link choice (acomm.transport.route): acoustic before a costly
 # satellite link while both reach, fail-over when the acoustic path goes,
 # a medium that pins a packet to one link, and "all" that sends a copy on
 # every link and delivers once. Then bad input at the transport: forged
 # and corrupted fragments, acknowledgements for unknown packets, fragments
 # that overrun the size they declared.
-from acomm import segment as sg
+from acomm.transport import segment as sg
 from acomm.errors import AcommError
 from acomm.events import DELIVERED, EXPIRED, QUEUED
 from acomm.prng import Prng

@@ -1,15 +1,15 @@
-# The transport's persistence: packets on a real file store (acomm.store)
+# The transport's persistence: packets on a real file store (acomm.transport.store)
 # across restarts, lifespans that keep counting through a restart, packet
 # ids never reused, duplicates suppressed when a restarted sender sends a
 # delivered packet again, big packets in several records, and the store's
-# overflow rule (acomm.packetstore) at the sender and at a relay.
-from acomm import segment as sg
-from acomm.arq import Outgoing
+# overflow rule (acomm.transport.packetstore) at the sender and at a relay.
+from acomm.transport import segment as sg
+from acomm.transport.arq import Outgoing
 from acomm.errors import StoreFull
 from acomm.events import DELIVERED, EXPIRED, FAILED, QUEUED, TRANSMITTED
-from acomm.packetstore import MemoryStore, PacketStore
+from acomm.transport.packetstore import MemoryStore, PacketStore
 from acomm.prng import Prng
-from acomm.store import Store
+from acomm.transport.store import Store
 from acomm.transport import Transport
 from checks import TempDir, raises
 from transportnet import net, packets, statuses, wall_of
@@ -92,7 +92,7 @@ def test_a_stored_blob_reads_what_the_joined_packet_holds():
 
 
 def _stored_packet(ps, body, medium):
-    from acomm.packetstore import Stored
+    from acomm.transport.packetstore import Stored
 
     p = Stored()
     p.origin, p.final, p.pid, p.prio, p.expiry, p.compressed, p.medium = 1, 2, 9, 5, 1000, False, medium

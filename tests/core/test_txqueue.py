@@ -1,9 +1,9 @@
 import gc
 
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.prng import Prng
-from acomm.txqueue import (
+from acomm.link.txqueue import (
     MAX_LIFESPAN_MS,
     PRIO_ALARM,
     PRIO_GESTURE,

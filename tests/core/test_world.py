@@ -3,7 +3,7 @@
 # gives the same run, TDMA keeps a busy network free of collisions where
 # unscheduled senders collide, and delay follows distance.
 from acomm.events import DELIVERED, EV_RECEIVED, EV_STATUS, TRANSMITTED, is_final
-from acomm.mac import Aloha, Tdma
+from acomm.drivers.mac import Aloha, Tdma
 from acomm_sim.world import World
 
 AIR = ((12 + 1 + 5 + 12) * 8000 + 399) // 400  # a 12-byte payload on BPSK

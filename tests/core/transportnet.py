@@ -4,7 +4,7 @@
 # start and costs money per byte) for link choice and fail-over.
 from acomm.drivers.transparent import TransparentDriver
 from acomm.events import EV_PACKET, EV_PACKET_STATUS
-from acomm.fakeuart import uart_pair
+from acomm_sim.fakeuart import uart_pair
 from acomm.transport import Transport
 from acomm_sim.channel import Channel
 from acomm_sim.world import World

@@ -1,5 +1,5 @@
 # The writer that tests/cpython/test_packet_crash.py kills: the transport's
-# packet records (acomm.packetstore) on an acomm.store file. It accepts
+# packet records (acomm.transport.packetstore) on an acomm.transport.store file. It accepts
 # packets of up to 1500 bytes (up to 7 records of 256 bytes each) and
 # finishes them at random, and reports each operation before it starts
 # ("B...") and after it returned ("E..."; "F..." when the store was full),
@@ -11,10 +11,10 @@ import io
 import random
 import sys
 
-import acomm.store
+import acomm.transport.store
 from acomm.errors import StoreFull
-from acomm.packetstore import PacketStore
-from acomm.store import Store
+from acomm.transport.packetstore import PacketStore
+from acomm.transport.store import Store
 from store_crash_writer import Piecewise
 
 CAPACITY = 48 * 1024
@@ -73,5 +73,5 @@ def main(path, seed):
 
 if __name__ == "__main__":
     if sys.argv[3:] == ["piecewise"]:
-        acomm.store.open = lambda path, mode="r": Piecewise(io.open(path, mode, buffering=0))
+        acomm.transport.store.open = lambda path, mode="r": Piecewise(io.open(path, mode, buffering=0))
     main(sys.argv[1], int(sys.argv[2]))

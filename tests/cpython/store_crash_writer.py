@@ -1,5 +1,5 @@
 # The writer that tests/cpython/test_store_crash.py kills: puts, replaces,
-# deletes and compacts records in an acomm.store at random, forever, and
+# deletes and compacts records in an acomm.transport.store at random, forever, and
 # reports each operation on stdout before it starts ("B...") and after it
 # returned ("E...", or "F..." when put() refused with StoreFull), so that
 # the test knows what was acknowledged and which one operation was cut.
@@ -16,9 +16,9 @@ import random
 import sys
 import time
 
-import acomm.store
+import acomm.transport.store
 from acomm.errors import StoreFull
-from acomm.store import Store
+from acomm.transport.store import Store
 
 
 class Piecewise:
@@ -87,5 +87,5 @@ def main(path, seed):
 if __name__ == "__main__":
     if sys.argv[3:] == ["piecewise"]:
         # the store's module-level name shadows the builtin
-        acomm.store.open = lambda path, mode="r": Piecewise(io.open(path, mode, buffering=0))
+        acomm.transport.store.open = lambda path, mode="r": Piecewise(io.open(path, mode, buffering=0))
     main(sys.argv[1], int(sys.argv[2]))

@@ -44,7 +44,7 @@ def _flash_and_run(tmp_path, name, peers, via):
         assert r.returncode == 0, r.stdout + r.stderr
         flash = b.flash
         assert (flash / "main.py").exists() and (flash / "config.py").exists()
-        assert (flash / "lib" / "acomm" / "link.mpy").exists()
+        assert (flash / "lib" / "acomm" / "link" / "__init__.mpy").exists()
         _scaffold(flash)
         out = b.mp("exec", RUN % (peers, via))
     finally:
@@ -52,7 +52,7 @@ def _flash_and_run(tmp_path, name, peers, via):
     # a marker may follow a stray byte of the raw REPL on a loaded machine
     # (a CI run failed on a RESULT line that did not start the line)
     line = [x[x.index("FROM "):] for x in out.splitlines() if "FROM " in x][0]
-    assert "link.mpy" in line and "assemble.mpy" in line  # the flashed, compiled modules ran
+    assert "link/__init__.mpy" in line and "assemble.mpy" in line  # the flashed, compiled modules ran
     res = [x[x.index("RESULT ") + len("RESULT "):] for x in out.splitlines() if "RESULT " in x]
     assert res, out
     return ast.literal_eval(res[0])

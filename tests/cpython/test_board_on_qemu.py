@@ -123,7 +123,7 @@ def test_the_buoy_flashed_to_the_cortex_m3_runs_from_the_flashed_mpy(tmp_path):
     assert set(files) == set(needed)
     for m, (f, path) in files.items():
         assert f.startswith("/lib/") and f.endswith(".mpy"), (m, f)  # the flashed, compiled module ran
-    assert files["acomm._crc16_viper"][0] == "/lib/acomm/_crc16_viper.mpy"  # armv6m viper loads on the M3
+    assert files["acomm.codec._crc16_viper"][0] == "/lib/acomm/codec/_crc16_viper.mpy"  # armv6m viper loads on the M3
     assert files["acomm.drivers"][1] == "/lib/acomm/drivers"
 
 
@@ -131,7 +131,7 @@ def test_the_production_buoy_gets_only_its_config_and_runs_frozen_acomm(tmp_path
     with QemuBoard(_need("cm3-buoy"), heap=HEAP) as b:
         # a stale copy of acomm from an earlier, unfrozen flash
         _mp(b.port, "exec", "import os\nfor d in ('/lib', '/lib/acomm', '/lib/acomm_mp'):\n    os.mkdir(d)\n"
-                            "open('/lib/acomm/link.py', 'w').write('BROKEN = 1\\n')")
+                            "open('/lib/acomm/node.py', 'w').write('BROKEN = 1\\n')")
         r = _flash(b.port)  # found out on the board, no --frozen
         assert r.returncode == 0, r.stdout + r.stderr
         assert "frozen in its firmware" in r.stdout and "copying only main.py and config.py" in r.stdout, r.stdout
@@ -143,7 +143,7 @@ def test_the_production_buoy_gets_only_its_config_and_runs_frozen_acomm(tmp_path
         assert b.alive(), b.stop()
     assert set(files) == set(needed)
     # from the firmware, not from /lib: a frozen module's __file__ is its
-    # name alone (acomm/link.py, no .mpy), its package's __path__ .frozen/...
+    # name alone (acomm/link/__init__.py, no .mpy), its package's __path__ .frozen/...
     for m, (f, path) in files.items():
         assert not f.startswith("/") and f.endswith(".py"), (m, f)
         assert path is None or path.startswith(".frozen/"), (m, path)

@@ -1,9 +1,9 @@
-# acomm.compress on the benchmark's 2 KiB dive log, against zlib level 9
+# acomm.codec.compress on the benchmark's 2 KiB dive log, against zlib level 9
 # (CPython only: MicroPython boards cannot compress with deflate). Pins the
 # ratio so a change to the compressor that costs bytes shows up.
 import zlib
 
-from acomm.compress import compress, decompress
+from acomm.codec.compress import compress, decompress
 from acomm_cpython.workloads.divelog import divelog
 
 

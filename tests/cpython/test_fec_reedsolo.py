@@ -1,11 +1,11 @@
-# Cross-check of acomm.fec against the reedsolo package (the `dev` extra
+# Cross-check of acomm.codec.fec against the reedsolo package (the `dev` extra
 # installs it; skipped when it is not importable): same codewords for the
 # same parameters, and each decoder repairs what the other encoded.
 import random
 
 import pytest
 
-from acomm.fec import ReedSolomon
+from acomm.codec.fec import ReedSolomon
 
 reedsolo = pytest.importorskip("reedsolo")
 

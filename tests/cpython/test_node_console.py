@@ -144,10 +144,10 @@ def test_a_file_through_the_transport_and_ctrl_c_with_a_persistent_store(tmp_pat
     assert any(d["id"] == 1 and d["sent"] == d["count"] > 1 for d in progress), progress
     # the store holds the second file, and a transport opened on it resumes it
     from acomm.node import Node
-    from acomm.store import Store
+    from acomm.transport.store import Store
     from acomm.transport import Transport
 
-    with Store(str(tmp_path / "store" / "acomm.store"), capacity_bytes=1 << 22) as s:
+    with Store(str(tmp_path / "store" / "acomm.transport.store"), capacity_bytes=1 << 22) as s:
         assert Transport(Node("buoy", 1), store=s).pending() == [2]
 
 

@@ -2,7 +2,7 @@
 # finishes multi-record packets on a store file and is killed at a random
 # moment, 200 times over the same file (every other run writing a few bytes
 # per syscall, so kills also tear records). After each kill a copy of the
-# file is recovered through acomm.packetstore, as a restarted transport
+# file is recovered through acomm.transport.packetstore, as a restarted transport
 # would: every packet whose put() returned is there with exactly its bytes,
 # every packet whose delete() returned is gone, the one operation that was
 # cut happened whole or not at all (never half a packet), and no packet id
@@ -13,8 +13,8 @@ import random
 import shutil
 import sys
 
-from acomm.packetstore import PacketStore
-from acomm.store import Store
+from acomm.transport.packetstore import PacketStore
+from acomm.transport.store import Store
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)

@@ -1,4 +1,4 @@
-# acomm.store under SIGKILL: a writer process (store_crash_writer.py) puts,
+# acomm.transport.store under SIGKILL: a writer process (store_crash_writer.py) puts,
 # replaces, deletes and compacts at random and is killed at a random moment,
 # 200 times over the same file; every other run writes a few bytes per
 # syscall so that kills also tear records. After each kill a copy of the file (and of a
@@ -15,7 +15,7 @@ import shutil
 import sys
 import time
 
-from acomm.store import Store
+from acomm.transport.store import Store
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)

@@ -121,7 +121,7 @@ class _Uart:
 
 
 def _store(path):
-    from acomm.store import Store
+    from acomm.transport.store import Store
 
     def open_store(st):
         # the board's store on a real file, as on its flash
@@ -167,7 +167,7 @@ def main(path, store_path, rom=None, info=False):
 
     for lk in cfg["links"]:
         driver_class(lk["modem"])
-    import acomm.store  # noqa: F401
+    import acomm.transport.store  # noqa: F401
     import acomm_mp.runloop  # noqa: F401
 
     gc.collect()

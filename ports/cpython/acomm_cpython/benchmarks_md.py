@@ -224,7 +224,7 @@ def render(records, machine):
       "(0.6 bit a character lost) and a line shorter than 40 characters ends with a 6-bit END; "
       "docs/codec.md says so. It still beats ltcodecs' 7-bit ASCII (%s bytes)." % f.s("bytes_chat_ltcodecs"))
     a("- **The 2 KiB log, %s bytes over zlib -9 and behind CBOR + zlib (%s bytes).** acomm's compressor "
-      "(acomm/compress.py) is an LZ77 with Elias-gamma codes and no entropy stage, sized for a buoy "
+      "(acomm/codec/compress.py) is an LZ77 with Elias-gamma codes and no entropy stage, sized for a buoy "
       "(2.5 KiB of tables; MicroPython's deflate only decompresses on most boards); zlib adds "
       "Huffman coding, which acomm's compressor does not have. The CBOR row is also one unfragmented message, which no acoustic "
       "modem carries in one frame; acomm pays %s bytes of fragmenting on 256-byte frames." % (

@@ -35,7 +35,7 @@ def run_session(modem, writer, max_ms=300000):
     events = ([], [])
     handles = [None, None]
     done_at = None
-    from acomm.caps import CAP_RELIABLE
+    from acomm.drivers.caps import CAP_RELIABLE
 
     ack = bool(drivers[0].caps.flags & CAP_RELIABLE)  # acknowledged where the modem can
     t = 0

@@ -21,7 +21,7 @@ import os
 import time
 from collections import deque
 
-from acomm.caps import CAP_RANGING
+from acomm.drivers.caps import CAP_RANGING
 from acomm.errors import AcommError
 from acomm.events import AVAILABLE, EV_AVAILABILITY, EV_PACKET, EV_PACKET_STATUS, EV_REFUSED, EV_STATUS
 from acomm.link import BROADCAST
@@ -93,7 +93,7 @@ class Console:
     `file` is refused); out: eventlines.Output; inbox: a folder where whole
     packets that arrive are saved (None: not saved); wheres: {link name:
     (kind, device)} for the status report; station: the board's
-    acomm.station.Station (alarm, chat) or None."""
+    acomm.apps.station.Station (alarm, chat) or None."""
 
     def __init__(self, node, transport, out, lifespan_s=30.0, inbox=None, wheres=None, station=None):
         self.node = node

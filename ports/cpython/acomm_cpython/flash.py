@@ -15,7 +15,7 @@
 # A board whose firmware has acomm frozen in (its modules are found under
 # .frozen, which comes before /lib on sys.path) gets only main.py and
 # config.py: the board is asked for acomm.__path__ (.frozen/acomm; a frozen
-# module's __file__ is only its name, acomm/link.py) and __version__ and
+# module's __file__ is only its name, acomm/link/__init__.py) and __version__ and
 # imports every module the board needs from its firmware. A version other
 # than the host's, or a module the firmware lacks, stops the flash (exit
 # 2; --force flashes past a version mismatch). Copies of acomm left in

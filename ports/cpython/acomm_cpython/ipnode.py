@@ -15,7 +15,8 @@
 import os
 import sys
 
-from acomm.auth import Auth
+from acomm.apps.policy import commands
+from acomm.frame.auth import Auth
 from acomm.errors import AcommError
 from acomm.events import AVAILABLE
 from acomm.link import BROADCAST
@@ -203,7 +204,7 @@ def main(args):
     closers = []
     try:
         if key is not None:
-            node.set_auth(Auth(key, args.tag_len, args.auth_counters), strict=not args.auth_open)
+            node.set_auth(Auth(key, args.tag_len, args.auth_counters), commands(), strict=not args.auth_open)
         closers += _ip_links(args, node, out)
         streams, watches, wheres = _modem_links(args, node)
         closers += streams

@@ -137,10 +137,10 @@ def add_console_arguments(p):
 
 def open_store(path_dir, capacity=1 << 22, max_record=1024):
     """The transport's persistent store in folder path_dir (made when missing)."""
-    from acomm.store import Store
+    from acomm.transport.store import Store
 
     os.makedirs(path_dir, exist_ok=True)
-    return Store(os.path.join(path_dir, "acomm.store"), capacity_bytes=capacity, max_record=max_record)
+    return Store(os.path.join(path_dir, "acomm.transport.store"), capacity_bytes=capacity, max_record=max_record)
 
 
 def open_log(path):

@@ -1,5 +1,5 @@
 # TCP links on CPython: the socket side of acomm.drivers.datagram with
-# streams=True. Each acomm frame travels length-prefixed (acomm.lenframe).
+# streams=True. Each acomm frame travels length-prefixed (acomm.frame.lenframe).
 #
 # TcpServerPort listens and serves up to max_clients connections at once
 # (more are accepted and closed at once, counted as refused). Each
@@ -24,7 +24,7 @@ import socket
 
 from acomm.drivers.datagram import DatagramDriver
 from acomm.errors import DecodeError
-from acomm.lenframe import HEADER_LEN, LenDecoder, append_frame
+from acomm.frame.lenframe import HEADER_LEN, LenDecoder, append_frame
 
 from .streams import TcpStream
 from .udp import resolve

@@ -1,7 +1,7 @@
 # A board's node built from its checked configuration (acomm_mp.boardconfig):
 # the node and its name table, one link per modem with that modem's sans-IO
 # driver, the store-and-forward transport on the board's store, and the
-# station (acomm.station) when the board sends reports by itself.
+# station (acomm.apps.station) when the board sends reports by itself.
 #
 # The I/O comes in from outside, so the same assembly runs on a board
 # (acomm_mp.start: machine.UART, a store on flash, time.ticks_ms) and in
@@ -17,7 +17,7 @@ import gc
 
 from acomm.compat import ticks_add, ticks_diff
 from acomm.node import Node
-from acomm.packetstore import MemoryStore
+from acomm.transport.packetstore import MemoryStore
 from acomm.transport import Transport
 
 from .boardconfig import ConfigError
@@ -82,12 +82,13 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         node.names.add(name, cfg["peers"][name])
     a = cfg.get("auth")
     if a is not None:
-        from acomm.auth import Auth
+        from acomm.apps.policy import commands
+        from acomm.frame.auth import Auth
 
         st = cfg["storage"]
         # the counters beside the store, so they survive a restart with it
         path = st["path"] + ".auth" if st is not None and open_store is not None else None
-        node.set_auth(Auth(a["key"], a["tag_len"], path, a["reserve"]))
+        node.set_auth(Auth(a["key"], a["tag_len"], path, a["reserve"]), commands())
     for i, lk in enumerate(cfg["links"]):
         try:
             drv = driver_class(lk["modem"])(lk["address"], **lk["options"])
@@ -104,7 +105,7 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
     if sc is not None:
         # imported only here: a relay without a station never loads the
         # station's codec and catalog into RAM
-        from acomm.station import Station
+        from acomm.apps.station import Station
 
         station = Station(node, transport, report_to=sc["report_to"], report_period_s=sc["report_period_s"],
                           make_report=make_report, alarm_to=sc["alarm_to"])

@@ -22,7 +22,7 @@
 #                 (default node_id), medium, link (Link options), options
 #                 (driver options)
 #   station       None, or {"report_to", "report_period_s", "alarm_to"}:
-#                 what acomm.station.Station sends by itself
+#                 what acomm.apps.station.Station sends by itself
 
 from acomm.errors import AcommError
 
@@ -114,7 +114,7 @@ def _link(i, lk, node_id, names):
 
 
 def _auth(a):
-    # the network key (acomm.auth) as hex; a wrong one is named but never
+    # the network key (acomm.frame.auth) as hex; a wrong one is named but never
     # echoed, since error messages reach consoles and logs
     if a is None:
         return None

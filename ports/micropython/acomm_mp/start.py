@@ -15,7 +15,7 @@ import os
 import time
 
 from acomm.compat import ticks_ms
-from acomm.store import Store
+from acomm.transport.store import Store
 
 from . import release
 from .assemble import build

@@ -16,7 +16,7 @@
 
 from acomm.catalog import caddy
 from acomm.events import EV_PACKET
-from acomm.station import diver_report
+from acomm.apps.station import diver_report
 from acomm.transport import Transport
 from acomm_mp.assemble import build
 from acomm_mp.boardconfig import check

@@ -15,7 +15,7 @@
 # (Link.set_reply -> DAT_QUEUE_SET) and refreshes it whenever it has been
 # asked; the beacon sends it in its automatic reply. The third agent hears
 # both by passive listening (beacons with hear_all, links with overhear).
-# Each agent runs an acomm.interrogation.Interrogation over the four steps;
+# Each agent runs an acomm.apps.interrogation.Interrogation over the four steps;
 # a step's timeout is what its longest request and reply take on the air
 # plus the beacons' full reply window and a margin, so a lost reply costs
 # one timeout and the cycle goes on.
@@ -47,7 +47,7 @@ from acomm.catalog import caddy as C
 from acomm.compat import ticks_add, ticks_diff
 from acomm.errors import DecodeError
 from acomm.events import DELIVERED, EV_RECEIVED, EV_STATUS, is_final
-from acomm.interrogation import Interrogation
+from acomm.apps.interrogation import Interrogation
 
 ROLES = ("pladypos", "buddy", "diver")
 STEPS = (("pladypos", "diver"), ("buddy", "pladypos"), ("buddy", "diver"), ("pladypos", "buddy"))

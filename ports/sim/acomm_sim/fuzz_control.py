@@ -1,4 +1,4 @@
-# Fuzz target "control": the sealed control plane (acomm.authguard's strict
+# Fuzz target "control": the sealed control plane (acomm.link.guard's strict
 # mode) under arbitrary frames. A node with the key, a link on an elided
 # modem that leaves acknowledgements to acomm, and a Transport, with an
 # acknowledged frame and a transport packet waiting for node 2; an input is
@@ -13,12 +13,13 @@
 # reassemblies and the link queue stays within its capacity.
 
 from acomm import frame as fr
-from acomm import segment as sg
-from acomm.auth import Auth
-from acomm.caps import CAP_ADDRESSING, CAP_BROADCAST, Capabilities
+from acomm.transport import segment as sg
+from acomm.apps.policy import commands
+from acomm.frame.auth import Auth
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, Capabilities
 from acomm.events import DELIVERED, EV_PACKET_STATUS, EV_STATUS, FAILED
-from acomm.linkframing import LinkFraming
-from acomm.names import AddressMap
+from acomm.link.framing import LinkFraming
+from acomm.link.names import AddressMap
 from acomm.node import Node
 from acomm.prng import Prng
 from acomm.transport import Transport
@@ -101,7 +102,7 @@ def _node():
     events = []
     node = Node("me", 1, lambda: 0, listener=events.append)
     node.names.add("peer", 2)
-    node.set_auth(Auth(KEY))
+    node.set_auth(Auth(KEY), commands())
     link = node.add_link("acoustic", _Modem(), advert_period_ms=600000, queue_capacity=8)
     Transport(node, wall=lambda: 1000)
     return node, link, events
@@ -150,14 +151,14 @@ def target():
 
 
 def file_target(tmpdir):
-    # Target "auth.file": the counter file (acomm.auth) as power cuts and
+    # Target "auth.file": the counter file (acomm.frame.auth) as power cuts and
     # flash rot leave it. Corpus: files Auth wrote (derived and dropped key
     # phases, sources with epochs). Oracle, beyond "only acomm errors": the
     # node starts whatever the file holds (a damaged one means a new epoch),
     # and then seals a frame that a peer holding its key phases opens.
     import os
 
-    from acomm.auth import OP_DROP, OP_INSTALL, OP_USE, key_command
+    from acomm.frame.auth import OP_DROP, OP_INSTALL, OP_USE, key_command
 
     from .fuzz_decoders import Target
 

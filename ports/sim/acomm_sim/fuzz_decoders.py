@@ -6,7 +6,7 @@
 # frame after garbage.
 
 from acomm import frame as fr
-from acomm import segment
+from acomm.transport import segment
 from acomm.errors import AcommError
 from acomm.prng import Prng
 
@@ -128,7 +128,7 @@ def _seaware_target():
 
 
 def _compress_target():
-    from acomm.compress import compress, decompress
+    from acomm.codec.compress import compress, decompress
 
     rng = Prng(104)
     texts = [b"status depth 12.5 heading 270 " * 3, b"\x00" * 90, bytes(range(64)) * 2, b"hello hello hello",
@@ -146,7 +146,7 @@ def _compress_target():
 
 
 def _fec_target():
-    from acomm.fec import ReedSolomon
+    from acomm.codec.fec import ReedSolomon
 
     rs = ReedSolomon(8)
     rng = Prng(105)
@@ -175,7 +175,7 @@ def _resync(feed, probe, want, rounds):
 
 
 def _slip_target():
-    from acomm import slip
+    from acomm.frame import slip
 
     rng = Prng(106)
     frames = [rng.bytes(1 + rng.below(60)) + b"\xc0\xdb" for _ in range(8)]
@@ -200,7 +200,7 @@ def _slip_target():
 
 
 def _lenframe_target():
-    from acomm import lenframe
+    from acomm.frame import lenframe
 
     rng = Prng(107)
     corpus = []
@@ -265,14 +265,14 @@ def _imc_stream_target():
 
 
 def _auth_target():
-    # Sealed frames (acomm.auth) through a link's framing, raw and elided:
+    # Sealed frames (acomm.frame.auth) through a link's framing, raw and elided:
     # only acomm errors escape, and a frame that verifies must be one that
     # was sealed: same type, addresses and payload (the sequence number and
     # the other flags are not covered). An 8-byte tag keeps a chance
     # forgery out of a million inputs.
-    from acomm.auth import Auth
-    from acomm.linkframing import LinkFraming
-    from acomm.names import AddressMap
+    from acomm.frame.auth import Auth
+    from acomm.link.framing import LinkFraming
+    from acomm.link.names import AddressMap
 
     key = b"fuzzing key 0123456789"
     rng = Prng(103)

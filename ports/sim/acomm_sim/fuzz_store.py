@@ -1,5 +1,5 @@
 # Fuzz target for the store's recovery (acomm_sim.fuzz has the engine):
-# valid store files are written with acomm.store.Store on a real file, a
+# valid store files are written with acomm.transport.store.Store on a real file, a
 # case writes a mutated copy to disk and reopens it. Oracle: only acomm
 # errors escape open/keys/get/recover; every record that survives is one
 # that was written, byte for byte, under its key; and the reopened store
@@ -9,9 +9,9 @@
 import os
 
 from acomm.errors import AcommError
-from acomm.packetstore import PacketStore
+from acomm.transport.packetstore import PacketStore
 from acomm.prng import Prng
-from acomm.store import Store
+from acomm.transport.store import Store
 
 from .fuzz import Failure
 

@@ -14,7 +14,7 @@
 
 from acomm.compat import ticks_diff
 from acomm.drivers.base import SansIO
-from acomm.slip import SlipDecoder, encode
+from acomm.frame.slip import SlipDecoder, encode
 
 # name -> (bit rate, framing bytes, fixed cost per packet in ms)
 PROFILES = {

@@ -18,7 +18,7 @@
 # sleeps and nothing is on the channel or the lines, the clock jumps to the
 # earliest wake-up. Runs stay deterministic. Modems (MODEMS below) are
 # looked up by name so that any emulated modem can be used; `mac` wraps the
-# node's driver (acomm.mac) to give it a TDMA slot or ALOHA backoff.
+# node's driver (acomm.drivers.mac) to give it a TDMA slot or ALOHA backoff.
 #
 # Applications (traffic generators, a teleop pilot, the CADDY cycle) join
 # with w.add_task(task): task.poll(now) runs at the start of every step it
@@ -30,10 +30,10 @@
 # their network on the channel and stay off the acoustic medium).
 # Portable Python (the core tests run it on MicroPython too).
 
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.compat import ticks_add, ticks_diff
-from acomm.fakeuart import uart_pair
-from acomm.mac import MacDriver
+from acomm_sim.fakeuart import uart_pair
+from acomm.drivers.mac import MacDriver
 from acomm.node import Node
 
 from .channel import Channel

@@ -19,7 +19,7 @@
 #  1200  end
 from acomm.catalog import caddy, teleop
 from acomm.events import AVAIL_NAMES, EV_AVAILABILITY, EV_RECEIVED, EV_STATUS, FAILED, EXPIRED
-from acomm.mac import Tdma
+from acomm.drivers.mac import Tdma
 from acomm_sim.caddy import CaddyCycle
 from acomm_sim.channel import Channel
 from acomm_sim.world import World

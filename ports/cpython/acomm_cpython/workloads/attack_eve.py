@@ -5,9 +5,9 @@
 # heard), pids, forged and sealed_tries (what it sent, for the spies), out
 # (packets waiting for the channel), restarted, sn (the nodes).
 from acomm import frame as fr
-from acomm import segment as sg
+from acomm.transport import segment as sg
 from acomm.catalog import teleop
-from acomm.compress import compress
+from acomm.codec.compress import compress
 from acomm.drivers import seatrac_wire as sw
 
 from ..demo.mission import ADDR, AUV, BUOY, DIVER

@@ -48,15 +48,16 @@ import shutil
 import tempfile
 
 from acomm import frame as fr
-from acomm import segment as sg
-from acomm.auth import Auth
+from acomm.transport import segment as sg
+from acomm.apps.policy import commands
+from acomm.frame.auth import Auth
 from acomm.catalog import teleop
 from acomm.events import (DELIVERED, EXPIRED, EV_PACKET, EV_PACKET_STATUS, EV_RECEIVED, EV_STATUS, FAILED, is_final)
-from acomm.dedup import DuplicateFilter
-from acomm.mac import Tdma
+from acomm.link.dedup import DuplicateFilter
+from acomm.drivers.mac import Tdma
 from acomm.prng import Prng
 from acomm.transport import Transport
-from acomm.transport_rx import _MAX_RX
+from acomm.transport.receive import _MAX_RX
 from acomm_sim.attacker import Attacker
 from acomm_sim.channel import Channel
 from acomm_sim.ledger import Ledger
@@ -100,7 +101,7 @@ class Attack(Forger):
             sn = w.add(name, ADDR[name], "seatrac", position=START[name], mac=Tdma(SLOTS, name, 0, TX_MS),
                        link_opts={"advert_period_ms": 60000, "queue_capacity": 64, "max_retries": 100},
                        listener=self._listener(name))
-            sn.node.set_auth(Auth(KEY, path=self._counters(name)), strict=strict)
+            sn.node.set_auth(Auth(KEY, path=self._counters(name)), commands(), strict=strict)
             Transport(sn.node, wall=lambda: w.now() // 1000)
             sn.step = self._stepper(sn)
             self.sn[name] = sn
@@ -276,7 +277,7 @@ class Attack(Forger):
             self.before_restart = list(self.recorded)
             node = self.sn[AUV].node
             self.refused_before = dict(node.guard.refused)
-            node.set_auth(Auth(KEY, path=self._counters(AUV)), strict=self.strict)
+            node.set_auth(Auth(KEY, path=self._counters(AUV)), commands(), strict=self.strict)
             node.links["acoustic"]._dups = DuplicateFilter(60000)
 
     def run(self):
@@ -363,9 +364,9 @@ def run(emit, open_mode=False):
 
 def frame_costs():
     # bytes on the air of the control frames, without and with the key
-    # (acomm.linkframing, as the links encode them); -> {name: bytes}
-    from acomm.linkframing import LinkFraming
-    from acomm.names import AddressMap
+    # (acomm.link.framing, as the links encode them); -> {name: bytes}
+    from acomm.link.framing import LinkFraming
+    from acomm.link.names import AddressMap
 
     out = {}
     for form, elided, link_acks in (("elided", True, False), ("elided_linkack", True, True), ("raw", False, True)):

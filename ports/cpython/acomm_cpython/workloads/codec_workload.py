@@ -32,7 +32,7 @@ try:
 except ImportError:  # MicroPython: the runner puts this folder on the path
     from timer import emit_json, rate
 
-from acomm.bits import BitReader, BitWriter
+from acomm.codec.bits import BitReader, BitWriter
 from acomm.catalog import MODULES, load
 from acomm.codec.text6 import Text6
 

@@ -22,7 +22,9 @@ except ImportError:  # MicroPython: the runner puts this folder on the path
 
 import math
 
-from acomm import compress, frame, segment
+from acomm.codec import compress
+from acomm import frame
+from acomm.transport import segment
 from acomm.catalog import caddy, seaware, teleop
 
 CHAT_LINE = "need air, ascending!"  # 20 characters

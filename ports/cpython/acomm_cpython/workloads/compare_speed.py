@@ -17,7 +17,9 @@ except ImportError:  # MicroPython: the runner puts this folder on the path
     import compare_items as ci
     from timer import emit_json, rate
 
-from acomm import compress, frame, segment
+from acomm.codec import compress
+from acomm import frame
+from acomm.transport import segment
 
 PER_RUNTIME = ("roundtrips_per_s_teleop", "roundtrips_per_s_diver", "roundtrips_per_s_pladypos",
                "roundtrips_per_s_vstate", "roundtrips_per_s_chat", "roundtrips_per_s_log")

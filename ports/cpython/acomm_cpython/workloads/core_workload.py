@@ -6,7 +6,7 @@ except ImportError:  # MicroPython: the runner puts this folder on the path
     from timer import emit_json, rate
 
 from acomm import frame
-from acomm.crc import crc16, crc16_pure
+from acomm.codec.crc import crc16, crc16_pure
 
 PER_RUNTIME = ("crc16_mbps", "crc16_pure_mbps", "frame_roundtrips_per_s")
 

@@ -12,10 +12,10 @@ try:
 except ImportError:  # MicroPython: the runner puts this folder on the path
     from timer import emit_json
 
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.drivers.transparent import TransparentDriver
 from acomm.events import AVAILABLE, EV_AVAILABILITY
-from acomm.fakeuart import uart_bus
+from acomm_sim.fakeuart import uart_bus
 from acomm.node import Node
 from acomm.prng import Prng
 

@@ -5,7 +5,7 @@
 # unix port.
 #
 #   run(emit) calls emit(name, value, unit) for:
-#     compress_ratio_divelog  compressed / original bytes, acomm.compress,
+#     compress_ratio_divelog  compressed / original bytes, acomm.codec.compress,
 #                             on divelog.divelog() (2048 bytes)
 #     zlib9_ratio_divelog     the same with zlib.compress(level 9) (CPython)
 #     compress_kbps           input kbit/s through compress (per runtime)
@@ -23,8 +23,8 @@ except ImportError:  # MicroPython: the runner puts this folder on the path
     from divelog import divelog
     from timer import emit_json, rate
 
-from acomm.compress import compress, decompress
-from acomm.fec import ReedSolomon
+from acomm.codec.compress import compress, decompress
+from acomm.codec.fec import ReedSolomon
 from acomm.prng import Prng
 
 PER_RUNTIME = ("compress_kbps", "decompress_kbps", "rs_encode_kbps", "rs_decode_kbps")

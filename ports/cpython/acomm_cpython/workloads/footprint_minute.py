@@ -147,7 +147,7 @@ def seed_store(path, n=LOAD_PACKETS, size=LOAD_BYTES, seed=1):
     that file, as a buoy does after a reset with packets waiting.
     """
     from acomm.prng import Prng
-    from acomm.store import Store
+    from acomm.transport.store import Store
     from acomm_mp.assemble import build
     from acomm_sim.boardsim import board_ends
 

@@ -1,4 +1,4 @@
-# Workload for acomm.txqueue, portable to MicroPython and CPython.
+# Workload for acomm.link.txqueue, portable to MicroPython and CPython.
 #
 #   run(emit) calls emit(name, value, unit) for:
 #     queue_ops_per_s                   push + pop cycles per second with about
@@ -32,10 +32,10 @@ try:
 except ImportError:  # run as a script: this folder is on the path
     from timer import elapsed_us, emit_json, now_us
 
-from acomm.clock import ManualClock
+from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.prng import Prng
-from acomm.txqueue import PRIO_ALARM, TxQueue, TxRequest
+from acomm.link.txqueue import PRIO_ALARM, TxQueue, TxRequest
 
 # Only the throughput depends on the runtime; the latency is counted in
 # frames on virtual time and comes out the same everywhere.

@@ -22,7 +22,7 @@
 #   caddy_cycle_seen_*           the same with the diver in sonar (7.64 s)
 import time
 
-from acomm.mac import Aloha, Tdma
+from acomm.drivers.mac import Aloha, Tdma
 from acomm.events import EV_RECEIVED
 from acomm_sim.world import World
 

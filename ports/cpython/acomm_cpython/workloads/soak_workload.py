@@ -37,10 +37,10 @@ import tracemalloc
 
 from acomm.errors import AcommError
 from acomm.events import EV_PACKET, EV_PACKET_STATUS
-from acomm.mac import MacDriver, Tdma
+from acomm.drivers.mac import MacDriver, Tdma
 from acomm.node import Node
 from acomm.prng import Prng
-from acomm.store import Store
+from acomm.transport.store import Store
 from acomm.transport import Transport
 from acomm_sim.channel import Channel
 from acomm_sim.ledger import Ledger

@@ -1,4 +1,4 @@
-# Workload for acomm.store, portable to MicroPython and CPython.
+# Workload for acomm.transport.store, portable to MicroPython and CPython.
 #
 #   run(emit) calls emit(name, value, unit) for:
 #     store_appends_per_s        put() of a 64-byte record (76 bytes with the
@@ -43,7 +43,7 @@ except ImportError:  # run as a script: this folder is on the path
     from timer import elapsed_us, emit_json, now_us, rate
 
 from acomm.compat import IS_MICROPYTHON
-from acomm.store import Store
+from acomm.transport.store import Store
 
 PER_RUNTIME = ("store_appends_per_s", "store_recover_kib_per_s")
 

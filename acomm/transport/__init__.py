@@ -1,0 +1,441 @@
+# The high-level transport (seed 000 section V): packets of any size up to
+# max_packet, kept in a store until delivered or expired, compressed when
+# that helps, fragmented to the MTU of the link chosen for them, sent with
+# selective-repeat ARQ (acomm.transport.arq) and relayed hop by hop on static routes.
+#
+#   t = Transport(node, store=None, routes={"buoy": "auv"}, wall=time.time)
+#   pid = t.send(now, "buoy", data, lifespan_s, priority, medium=None)
+#   node.step(now)                        # polls the transport too
+#
+# Events to the node's listener: (EV_PACKET_STATUS, pid, status, reason)
+# with queued, transmitted (a relay took custody), delivered (the
+# destination has it all), expired, failed; and (EV_PACKET, src, dst, data)
+# for every packet that arrived whole and decoded. Every packet send()
+# accepted gets exactly one of the final statuses; one it refuses (the
+# store's overflow rule, acomm.transport.packetstore) gets `failed` at once.
+#
+# medium: None or "any" (the best link, acomm.transport.route), a link's name or kind
+# ("acoustic", "satellite"), or "all": a copy on every link, the first to
+# arrive counts (IMC's TransmissionRequest comm_mean ALL); the receiver
+# delivers it once.
+#
+# The store keeps each packet until it is final, so a restart resumes what
+# was pending. Lifespans are kept in wall-clock seconds (wall(): time.time
+# on both runtimes): the millisecond ticks of the node restart from zero.
+#
+# A hop's transfer runs on one of two lanes per neighbour, so an urgent
+# packet never waits behind a long one for more than the fragment on the
+# air. Three polls in a row without an answer mark the link as stalled
+# towards that neighbour; when another link is then better, the transfer
+# starts over there (fail-over: acoustic to satellite).
+
+from . import segment as sg
+from .arq import Outgoing
+from ..compat import const, ticks_add, ticks_diff
+from ..errors import AcommError, StoreFull
+from ..frame import SEGMENT
+from .packetstore import DONE_MEMORY, MemoryStore, PacketStore
+from .route import MEDIUM_ALL, Router
+from .receive import Receiving
+
+# acomm.events' codes, as private constants: inlined, they cost a board no
+# RAM (imported, each took a slot in this module's dict)
+_DELIVERED = const(5)
+_EV_PACKET_STATUS = const(26)
+_EXPIRED = const(6)
+_FAILED = const(8)
+_QUEUED = const(1)
+_TRANSMITTED = const(4)
+
+_PIPELINE = const(3)  # fragments of one transfer in a link queue at a time
+_STALL_POLLS = const(3)  # unanswered polls in a row before trying another link
+_FULL_WAIT_MS = const(60000)  # a relay that was full is asked again after this
+
+__all__ = ("Transport", "MemoryStore")
+
+
+class _Packet:
+    __slots__ = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link",
+                 "hop", "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks", "size")
+
+
+def _wall_default():
+    import time
+
+    return int(time.time())
+
+
+class Transport(Receiving):
+    def __init__(self, node, store=None, routes=None, wall=None, max_packet=65536, compress=True, listener=None,
+                 urgent=4):
+        self.node = node
+        self.packets = PacketStore(store if store is not None else MemoryStore(), urgent)
+        self.router = Router(node, routes, urgent)
+        self.wall = wall or _wall_default
+        self.max_packet = max_packet
+        self.compress = compress
+        self.listener = listener
+        self._out = []  # _Packet, pending, most urgent first
+        self._lanes = {}  # (link name, hop id) -> [packet or None, packet or None]
+        self._gens = {}  # (link name, hop id, lane) -> generation of its last transfer
+        self._reqs = {}  # link request id -> (packet or None once abandoned, fragment index, poll flag)
+        self._rtt = {}  # (link name, hop id) -> [smoothed poll-to-SACK time, its mean deviation], ms
+        self.stats = {"sent": 0, "delivered": 0, "expired": 0, "failed": 0, "received": 0, "relayed": 0,
+                      "fragments": 0, "resent": 0, "sacks": 0, "rx_bad": 0, "rx_dup": 0, "refused": 0, "refused_unauthed": 0,
+                      "store_full": 0, "failovers": 0}
+        Receiving.__init__(self)
+        node.transport = self
+        self._recover()
+
+    @property
+    def store(self):
+        return self.packets.store
+
+    @property
+    def routes(self):
+        return self.router.routes
+
+    # -- the API ---------------------------------------------------------------
+    def send(self, now, dst, data, lifespan_s, priority=10, medium=None):
+        """Stores a packet for dst -> its id; one final EV_PACKET_STATUS follows. AcommError for wrong arguments."""
+        final = self.node.names.id_of(dst)
+        if final is None or final == self.node.node_id:
+            raise AcommError("no such destination %r" % (dst,))
+        if not 1 <= priority <= 16 or lifespan_s <= 0:
+            raise AcommError("priority 1..16 and a positive lifespan, please")
+        if len(data) > self.max_packet:
+            raise AcommError("%d bytes exceed the %d-byte packet limit" % (len(data), self.max_packet))
+        if medium is not None and not self.router.links(medium):
+            raise AcommError("no link for medium %r" % (medium,))
+        p = self._packet(self.node.node_id, final, 0, priority, self.wall() + int(lifespan_s), bytes(data), False,
+                         medium)
+        try:
+            p.pid = self.packets.next_pid()
+        except StoreFull:
+            # refused below; the id is not reserved, but nothing went out with it
+            p.pid = self.packets.pid = (self.packets.pid + 1) & 0xFFFF
+        p.key = (p.origin << 16) | p.pid
+        self.stats["sent"] += 1
+        if not self._keep(p):
+            self.stats["failed"] += 1
+            self._emit((_EV_PACKET_STATUS, p.pid, _FAILED, "store full"))
+            return p.pid
+        self._status(p, _QUEUED, "")
+        return p.pid
+
+    def pending(self):
+        return [p.pid for p in self._out if not p.relayed and (p.group is None or p.group[0] is p)]
+
+    def _packet(self, origin, final, pid, prio, expiry, body, compressed, medium):
+        p = _Packet()
+        p.key = (origin << 16) | pid
+        p.origin, p.final, p.pid, p.prio, p.expiry = origin, final, pid, prio, expiry
+        p.body, p.compressed, p.medium = body, compressed, medium
+        p.out = p.link = p.hop = p.timer = p.polled = p.wait = p.group = None
+        p.inflight = p.polling = p.misses = p.chunks = 0
+        p.relayed = origin != self.node.node_id
+        # only the origin compresses: a relay forwards the body as the
+        # origin chose it (a second try would not shrink it and costs a
+        # relay its compression tables, 2.5 KiB, on every packet)
+        if body is not None and not compressed and not p.relayed and self.compress and len(body) > 16:
+            from ..codec.compress import compress  # loaded by the first packet of its own
+
+            z = compress(body)
+            if len(z) < len(body):
+                p.body, p.compressed = z, True
+        p.size = 0 if p.body is None else len(p.body)
+        return p
+
+    def _keep(self, p):
+        # -> False when the store's overflow rule refuses the packet
+        if not self.packets.room(p):
+            self.stats["store_full"] += 1
+            return False
+        try:
+            self.packets.put(p)
+        except StoreFull:
+            self.stats["store_full"] += 1
+            return False
+        # from now on the body is in the store only, read back while the
+        # packet is sent: a buoy holding packets while its uplink is down
+        # keeps their headers in RAM, not their bodies
+        p.body = None
+        self._queue(p)
+        return True
+
+    def _queue(self, p):
+        if p.medium != MEDIUM_ALL:
+            self._out.append(p)
+        else:
+            # one copy per link, sharing the stored record and the id
+            group = []
+            for link in self.router.links(MEDIUM_ALL):
+                c = _Packet()
+                for k in _Packet.__slots__:
+                    setattr(c, k, getattr(p, k))
+                c.medium, c.group = link.name, group
+                group.append(c)
+                self._out.append(c)
+        self._out.sort(key=lambda q: q.prio)
+
+    def _recover(self):
+        # packets back from the store mean a life before this one with
+        # transfers cut short: their lanes are probed first (_start)
+        self._resumed = False
+        for s in self.packets.recover():
+            self._resumed = True
+            p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, None, s.compressed, s.medium)
+            p.chunks, p.size = s.chunks, s.size
+            self._queue(p)
+        self._done = self.packets.done[-DONE_MEMORY:]
+
+    # -- statuses --------------------------------------------------------------------
+    def _emit(self, ev):
+        if self.listener is not None:
+            self.listener(ev)
+        else:
+            self.node._on_event(ev)
+
+    def _status(self, p, status, reason):
+        if not p.relayed:
+            self._emit((_EV_PACKET_STATUS, p.pid, status, reason))
+
+    def _final(self, now, p, status, reason=""):
+        group = p.group
+        if group is not None:
+            if status == _FAILED and len(group) > 1:
+                group.remove(p)  # the other copies may still make it
+                self._drop(now, p)
+                return
+            for c in group:
+                self._drop(now, c)
+        else:
+            self._drop(now, p)
+        self.packets.delete(p)
+        name = {_DELIVERED: "delivered", _TRANSMITTED: "delivered", _EXPIRED: "expired", _FAILED: "failed"}[status]
+        self.stats[name] += 1
+        self._status(p, status, reason)
+
+    def _drop(self, now, p):
+        if p in self._out:
+            self._out.remove(p)
+        self._abandon(now, p)
+
+    def _abandon(self, now, p):
+        # stop p's transfer: its lane, its fragments still in a link queue
+        if p.out is not None:
+            lanes = self._lanes.get((p.link.name, p.hop))
+            if lanes is not None and lanes[p.out.lane] is p:
+                lanes[p.out.lane] = None
+            p.out = None
+        p.timer = None
+        p.inflight = p.polling = p.misses = 0
+        for rid in [r for r in self._reqs if self._reqs[r][0] is p]:
+            self._reqs[rid] = (None, 0, 0)  # its final status still comes: swallow it
+            p.link.cancel(now, rid, "transfer abandoned")
+
+    # -- starting a transfer ------------------------------------------------------------
+    def _start(self, p, now):
+        if p.wait is not None:
+            if ticks_diff(now, p.wait) < 0:
+                return
+            p.wait = None
+        r = self.router.choose(p.final, p.size, p.prio, p.medium)
+        if r is None:
+            return
+        link, hop = r
+        lanes = self._lanes.setdefault((link.name, hop), [None, None])
+        lane = 0 if lanes[0] is None else (1 if lanes[1] is None else None)
+        if lane is None:
+            return
+        gk = (link.name, hop, lane)
+        # the first transfer on this lane since a start that resumed
+        # packets: the receiver may hold half of one (acomm.transport.arq probe())
+        first = self._resumed and gk not in self._gens
+        gen = 1 - self._gens.get(gk, 1)
+        self._gens[gk] = gen
+        relay = None
+        if p.relayed or p.final != hop:
+            relay = (p.origin, p.final, p.prio, p.expiry - self.wall())
+        # a queued packet's body is in the store (_keep, _recover): the
+        # fragments are read back as they go
+        head = sg.packet_header(p.pid, p.size, p.compressed, relay)
+        blob = self.packets.blob(p.key, head)
+        if blob is None or len(blob) != len(head) + p.size:
+            self._final(now, p, _FAILED, "lost from the store")
+            return
+        try:
+            p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
+        except ValueError as e:
+            self._final(now, p, _FAILED, str(e))
+            return
+        lanes[lane] = p
+        p.link, p.hop = link, hop
+        if first:
+            p.out.probe()
+        else:
+            p.out.new_round()
+
+    # -- sending -------------------------------------------------------------------
+    def poll(self, now):
+        wall = self.wall()
+        for p in list(self._out):
+            if p not in self._out:
+                continue  # a copy that went with its group
+            if wall >= p.expiry:
+                self._final(now, p, _EXPIRED, "lifespan over")
+            elif p.out is None:
+                self._start(p, now)
+        # a link with a poll out waits for the SACK: a half-duplex modem
+        # that sends another transfer's fragment meanwhile is deaf to it
+        held = []
+        for p in self._out:
+            if p.out is not None and (p.polling or p.timer is not None) and p.link not in held:
+                held.append(p.link)
+        for p in list(self._out):
+            if p.out is not None:
+                self._pump(p, now, p.link in held)
+                # one poll out per link: a second lane's poll right behind
+                # it would be on the air when the first one's SACK comes
+                if p.out is not None and p.polling and p.link not in held:
+                    held.append(p.link)
+        self._rx_poll(now)
+
+    def _pump(self, p, now, held):
+        o = p.out
+        if p.timer is not None:
+            if ticks_diff(now, p.timer) < 0:
+                return
+            # no SACK came: ask again, or elsewhere when the link has stalled
+            p.timer = None
+            p.misses += 1
+            if p.misses >= _STALL_POLLS:
+                p.misses = 0
+                self.router.stall(p.link, p.hop, now)
+                r = self.router.choose(p.final, p.size, p.prio, p.medium)
+                if r is not None and r[0] is not p.link:
+                    self.stats["failovers"] += 1
+                    self._abandon(now, p)
+                    return
+            self.stats["resent"] += 1
+            self._request(p, now, o.repoll())
+            return
+        while p.inflight < _PIPELINE and not held:
+            if o.sent_in_round == len(o.round) - 1 and p.inflight:
+                # the poll goes last: the link queue may reorder, and a
+                # fragment after the poll would be on the air (deaf, half-
+                # duplex) when the SACK comes back
+                return
+            nf = o.next_fragment()
+            if nf is None:
+                return
+            self._request(p, now, nf)
+            if p.out is not o:
+                return  # it failed (a record of its body was lost)
+
+    def _request(self, p, now, nf):
+        index, head, data = nf
+        if data is None:
+            self._final(now, p, _FAILED, "lost from the store")
+            return
+        rid = self.node.next_req_id()
+        life = p.expiry - self.wall()
+        if life < 1:
+            life = 1
+        if p.link.request(now, rid, self.node.names.name_of(p.hop), data, life, p.prio, False, None, SEGMENT, head):
+            poll = sg.is_poll(head)
+            self._reqs[rid] = (p, index, poll)
+            p.inflight += 1
+            if poll:
+                p.polling += 1
+            self.stats["fragments"] += 1
+
+    def on_link_status(self, now, rid, status, reason):
+        # -> True when the request was the transport's
+        if self._sack_status(now, rid, status):
+            return True
+        r = self._reqs.get(rid)
+        if r is None:
+            return False
+        if status < _TRANSMITTED:
+            return True
+        del self._reqs[rid]
+        p, index, poll = r
+        if p is None:
+            return True
+        p.inflight -= 1
+        if poll:
+            p.polling -= 1
+        if p.out is not None and poll:
+            if status == _TRANSMITTED:
+                p.polled = now
+                p.timer = ticks_add(now, self._sack_timeout(p))
+            else:
+                p.timer = now  # the poll never went: ask again at once
+        return True
+
+    # -- how long to wait for a SACK -----------------------------------------------
+    # The link's ack timeout is sized for a full frame there and an ack
+    # back, and a poll is answered by a short SACK: after a lost poll or SACK
+    # the sender would sit idle for most of it. So, as TCP does, the time
+    # from a poll's end to its SACK is measured per link and neighbour
+    # (only for rounds without a repoll, whose SACK could answer either),
+    # and the wait is the smoothed time plus four deviations, at least
+    # twice the smoothed time and 1 s more (a receiver's modem may be busy
+    # a moment), at most twice the link's ack timeout.
+    def _sack_timeout(self, p):
+        e = self._rtt.get((p.link.name, p.hop))
+        cap = 2 * p.link.ack_timeout_ms
+        if e is None:
+            return p.link.ack_timeout_ms
+        t = e[0] + max(4 * e[1], e[0], 1000)
+        return cap if t > cap else t
+
+    def _rtt_sample(self, p, ms):
+        k = (p.link.name, p.hop)
+        e = self._rtt.get(k)
+        if e is None:
+            self._rtt[k] = [ms, ms // 2]
+        else:
+            err = ms - e[0]
+            e[0] += err // 8
+            e[1] += ((err if err > 0 else -err) - e[1]) // 4
+
+    def _on_sack(self, now, link, src, s):
+        lanes = self._lanes.get((link.name, src))
+        p = None if lanes is None else lanes[s.lane]
+        if p is None or p.out is None or p.out.gen != s.gen:
+            self.stats["rx_bad"] += 1
+            return
+        if not p.out.on_sack(s):
+            # a completion of an older packet on this lane: the receiver
+            # kept a stale generation; start over on the other one
+            self._abandon(now, p)
+            return
+        if p.polled is not None and p.misses == 0:
+            self._rtt_sample(p, ticks_diff(now, p.polled))
+        p.timer = p.polled = None
+        p.misses = 0
+        # the answer can come before the link reports the poll sent (a
+        # short poll and SACK on a link with slow statuses): that poll is
+        # answered, so its status must neither hold the link nor start a
+        # wait for a SACK that has already come
+        for rid in self._reqs:
+            q = self._reqs[rid]
+            if q[0] is p and q[2]:
+                self._reqs[rid] = (p, q[1], False)
+                p.polling -= 1
+        o = p.out
+        if o.refused is not None:
+            self.stats["refused"] += 1
+            if o.refused == sg.REFUSE_FULL:
+                # the relay's store is full: it never drops what it took,
+                # so room comes back as those packets leave; ask later
+                self._abandon(now, p)
+                p.wait = ticks_add(now, _FULL_WAIT_MS)
+            else:
+                self._final(now, p, _FAILED, "refused: %s" % sg.refuse_name(o.refused))
+        elif o.complete:
+            self._final(now, p, _TRANSMITTED if p.final != src else _DELIVERED, "")
+        else:
+            o.new_round()

@@ -1,0 +1,312 @@
+# The transport's packets in a store (acomm.transport.store.Store on a file, or the
+# MemoryStore here), and the store's overflow rule.
+#
+# A packet is one or more records. Chunk 0 holds the header and the start
+# of the body; chunks 1..n-1 the rest, each at most the store's max_record.
+# Key of chunk i: i << 24 | origin << 16 | pid. put() writes chunks 1..n-1
+# first and chunk 0 last, delete() removes chunk 0 first: a packet exists
+# exactly when its chunk 0 does, and recovery deletes chunks left without
+# one (a cut in the middle of a put or a delete).
+#
+# Chunk 0 header, 11 bytes: origin, final destination, pid (2, big-endian),
+# priority, flags (bit 0: body compressed; bit 1: a medium name follows),
+# expiry (4, wall-clock seconds, big-endian), chunk count; then the medium
+# (a length byte and the name) when flagged; then body bytes.
+#
+# One more record, key 0xFFFFFF (origin 255 is the broadcast address, never
+# a sender), holds the packet id limit: ids below it may have been used.
+# It is written once per _PID_BLOCK packets, so a restarted sender never
+# reuses an id a receiver may still remember (duplicate suppression keys on
+# origin and id), without a write per packet.
+#
+# Another, key 0xFFFFFE, holds the receiver's last DONE_MEMORY delivered
+# (origin, pid) pairs, 3 bytes each, rewritten at every delivery: a
+# receiver that lost power between delivering a packet and its sender
+# hearing the SACK would otherwise deliver the resent packet a second time.
+#
+# Overflow rule: a store with a capacity keeps its last quarter for urgent
+# packets (priority <= urgent). A packet that does not fit is refused when
+# it is offered (send() reports `failed`; a relay answers "receiver full"
+# and the sender keeps the packet and tries again later). A packet once
+# accepted is never dropped to make room: it leaves when delivered or
+# expired.
+
+from ..compat import const
+from ..errors import StoreFull
+
+_HDR = const(11)
+_META = const(0xFFFFFF)
+_DONE = const(0xFFFFFE)
+DONE_MEMORY = const(32)
+_PID_BLOCK = const(32)
+_REC_OVERHEAD = const(12)  # acomm.transport.store's record header and CRC
+_F_COMPRESSED = const(1)
+_F_MEDIUM = const(2)
+# Room kept free for the id-limit record: a store rewrites it while the old
+# copy is still live, so two copies must fit. Without it a full store could
+# not move the limit and no new packet id could be handed out safely.
+# The same for the delivered pairs (at their most), so that a full store
+# still remembers what it delivered.
+_META_ROOM = const(2 * (_REC_OVERHEAD + 2) + 2 * (_REC_OVERHEAD + 3 * DONE_MEMORY))
+
+
+class MemoryStore:
+    # The store's interface in RAM (tests, nodes without storage); a
+    # capacity makes it apply the same limit as a file store.
+    def __init__(self, capacity_bytes=None, max_record=65535):
+        self._d = {}
+        self.capacity_bytes = capacity_bytes
+        self.max_record = max_record
+        self.live_bytes = 0
+
+    def put(self, key, data):
+        old = self._d.get(key)
+        grow = len(data) + _REC_OVERHEAD - (0 if old is None else len(old) + _REC_OVERHEAD)
+        if self.capacity_bytes is not None and self.live_bytes + grow > self.capacity_bytes:
+            raise StoreFull("store full")
+        self._d[key] = bytes(data)
+        self.live_bytes += grow
+
+    def delete(self, key):
+        old = self._d.pop(key, None)
+        if old is not None:
+            self.live_bytes -= len(old) + _REC_OVERHEAD
+
+    def get(self, key):
+        return self._d.get(key)
+
+    def length(self, key):
+        d = self._d.get(key)
+        return None if d is None else len(d)
+
+    def keys(self):
+        return list(self._d)
+
+
+class Stored:
+    # what recover() gives back for each packet
+    # body is None: the transport reads it back (blob()) when it sends the packet
+    # at: where the body starts in chunk 0
+    __slots__ = ("origin", "final", "pid", "prio", "expiry", "compressed", "medium", "body", "chunks", "size", "key",
+                 "at")
+
+
+class StoredBlob:
+    # A packet as its transfer sends it, a packet header (head) and then the
+    # body, with the body left in the store: read() reads back only the
+    # records that hold the bytes asked for. A buoy sending a 1 KiB packet
+    # then holds a record or two at a time, not the body joined from its
+    # records and copied again behind the header: three allocations of the
+    # packet's size, its largest, made when its heap is fragmented.
+    __slots__ = ("head", "store", "key", "at", "chunk", "size")
+
+    def __len__(self):
+        return len(self.head) + self.size
+
+    def read(self, off, n):
+        """Bytes off..off+n of head + body (fewer past the end); None when a record is gone or shorter than it was."""
+        head = self.head
+        out = b""
+        if off < len(head):
+            out = head[off : off + n]
+            n -= len(out)
+            off = 0
+        else:
+            off -= len(head)
+        end = off + n
+        if end > self.size:
+            end = self.size
+        first = self.chunk - self.at  # body bytes in chunk 0 (put() fills it)
+        while off < end:
+            if off < first:
+                i, a = 0, self.at + off
+                take = (end if end < first else first) - off
+            else:
+                i = 1 + (off - first) // self.chunk
+                a = (off - first) % self.chunk
+                take = self.chunk - a
+                if take > end - off:
+                    take = end - off
+            rec = self.store.get((i << 24) | self.key)
+            if rec is None or len(rec) < a + take:
+                return None
+            out += rec[a : a + take]
+            off += take
+        return out
+
+
+class PacketStore:
+    def __init__(self, store, urgent=4):
+        self.store = store
+        self.urgent = urgent
+        self.chunk = min(getattr(store, "max_record", 65535), 65535)
+        self.pid = 0
+        self._limit = 0  # ids up to here are covered by the stored limit
+        self.done = []  # (origin, pid) delivered lately, as recover() found them
+
+    def _sizes(self, p):
+        # p.size: the body's length (the body itself may be in the store only)
+        n = _HDR + (1 + len(p.medium) if p.medium else 0) + p.size
+        return n, (n + self.chunk - 1) // self.chunk
+
+    def room(self, p, urgent=None):
+        # whether the overflow rule lets packet p in (urgent: the packet may
+        # use the last quarter; default: by its priority)
+        cap = getattr(self.store, "capacity_bytes", None)
+        if cap is None:
+            return True
+        n, chunks = self._sizes(p)
+        if urgent is None:
+            urgent = p.prio <= self.urgent
+        limit = (cap if urgent else cap - cap // 4) - _META_ROOM
+        return self.store.live_bytes + n + chunks * _REC_OVERHEAD <= limit
+
+    def next_pid(self):
+        pid = (self.pid + 1) & 0xFFFF
+        if ((pid - self._limit) & 0xFFFF) < 0x8000:
+            # past the stored limit: move it a block ahead first
+            limit = (pid + _PID_BLOCK) & 0xFFFF
+            self.store.put(_META, bytes((limit >> 8, limit & 0xFF)))
+            self._limit = limit
+        self.pid = pid
+        return pid
+
+    def save_done(self, done):
+        # done: [(origin, pid)], at most DONE_MEMORY of them
+        b = bytearray(3 * len(done))
+        i = 0
+        for o, pid in done:
+            b[i] = o
+            b[i + 1] = pid >> 8
+            b[i + 2] = pid & 0xFF
+            i += 3
+        self.store.put(_DONE, bytes(b))  # the room for it is kept (_META_ROOM)
+
+    def put(self, p):
+        # raises StoreFull (nothing of the packet stays then)
+        n, chunks = self._sizes(p)
+        if chunks > 255:
+            raise StoreFull("packet of %d bytes needs more than 255 records" % p.size)
+        if not self.room(p, True):
+            raise StoreFull("store full")
+        p.chunks = chunks
+        flags = (_F_COMPRESSED if p.compressed else 0) | (_F_MEDIUM if p.medium else 0)
+        e = p.expiry & 0xFFFFFFFF
+        head = bytes((p.origin, p.final, p.pid >> 8, p.pid & 0xFF, p.prio, flags, e >> 24, (e >> 16) & 0xFF,
+                      (e >> 8) & 0xFF, e & 0xFF, chunks))
+        if p.medium:
+            m = p.medium.encode()
+            head += bytes((len(m),)) + m
+        first = self.chunk - len(head)
+        body = p.body
+        try:
+            for i in range(1, chunks):
+                a = first + (i - 1) * self.chunk
+                self.store.put((i << 24) | p.key, body[a : a + self.chunk])
+            self.store.put(p.key, head + body[:first])
+        except StoreFull:
+            for i in range(1, chunks):
+                self.store.delete((i << 24) | p.key)
+            raise
+
+    def delete(self, p):
+        # p.chunks: what put() or recover() found (a copy of an "all"
+        # packet has another medium than the record)
+        self.store.delete(p.key)
+        for i in range(1, p.chunks):
+            self.store.delete((i << 24) | p.key)
+
+    def body(self, key):
+        """The stored body of the packet with this key, read back from the store; None when it is gone or damaged."""
+        s = self._load(key, True)
+        return None if s is None else s.body
+
+    def blob(self, key, head):
+        """The packet with this key as sent, head then its body, which stays in the store (StoredBlob); None when a record of it is gone."""
+        s = self._load(key, False)
+        if s is None:
+            return None
+        b = StoredBlob()
+        b.head, b.store, b.key, b.at, b.size, b.chunk = head, self.store, key, s.at, s.size, self.chunk
+        return b
+
+    def recover(self):
+        # -> [Stored] without their bodies (a board's heap holds only what
+        # it is sending); drops what a cut left incomplete
+        st = self.store
+        keys = st.keys()
+        heads = {}
+        for k in keys:
+            if k == _META:
+                m = st.get(k)
+                if m is not None and len(m) == 2:
+                    self._limit = self.pid = (m[0] << 8) | m[1]
+            elif k == _DONE:
+                m = st.get(k) or b""
+                self.done = [(m[i], (m[i + 1] << 8) | m[i + 2]) for i in range(0, len(m) - 2, 3)]
+            elif k >> 24 == 0:
+                heads[k] = True
+        out = []
+        for k in keys:
+            if k == _DONE:
+                continue
+            if k == _META or k >> 24:
+                if k != _META and (k & 0xFFFFFF) not in heads:
+                    st.delete(k)  # a chunk whose packet is gone or never finished
+                continue
+            s = self._load(k, False)
+            if s is None:
+                self._drop(k)
+            else:
+                out.append(s)
+        return out
+
+    def _load(self, k, with_body):
+        # with_body False: the header, and the body's size from the records'
+        # lengths (every chunk must be there), without reading the chunks
+        rec = self.store.get(k)
+        if rec is None or len(rec) < _HDR:
+            return None
+        s = Stored()
+        s.key = k
+        s.origin, s.final, s.pid, s.prio = rec[0], rec[1], (rec[2] << 8) | rec[3], rec[4]
+        s.compressed = bool(rec[5] & _F_COMPRESSED)
+        s.expiry = int.from_bytes(rec[6:10], "big")
+        s.chunks = chunks = rec[10]
+        at = _HDR
+        s.medium = None
+        if rec[5] & _F_MEDIUM:
+            if at >= len(rec) or at + 1 + rec[at] > len(rec):
+                return None
+            try:
+                s.medium = rec[at + 1 : at + 1 + rec[at]].decode()
+            except ValueError:  # UnicodeError on CPython
+                return None
+            at += 1 + rec[at]
+        s.at = at
+        s.size = len(rec) - at
+        s.body = None
+        parts = [rec[at:]] if with_body else None
+        for i in range(1, chunks):
+            ck = (i << 24) | k
+            if with_body:
+                c = self.store.get(ck)
+                n = None if c is None else len(c)
+            else:
+                n = self.store.length(ck)
+            if n is None:
+                return None
+            s.size += n
+            if with_body:
+                parts.append(c)
+        if with_body:
+            s.body = b"".join(parts)
+        return s
+
+    def _drop(self, k):
+        self.store.delete(k)
+        for i in range(1, 256):
+            kk = (i << 24) | k
+            if self.store.get(kk) is None:
+                break
+            self.store.delete(kk)
