@@ -1,6 +1,7 @@
 # The Node: one system on the network. It owns its links and the name table,
 # moves bytes between each link and its byte stream, and passes every link
-# event to one listener. Time is injected: step(now) does one round of work
+# event to its listeners (each gets every event, in the order they were
+# added; with none, events wait in a bounded backlog). Time is injected: step(now) does one round of work
 # at the given time (the simulator calls it on virtual time); run() loops on
 # asyncio with the node's clock (the ports use it on real time).
 #
@@ -27,15 +28,16 @@ _READS_PER_STEP = const(16)
 
 
 class Node:
-    """One system on the network: its name and id (0..254), links, name table; every event to listener(ev)."""
+    """One system on the network: its name and id (0..254), links, name table; every event to its listeners."""
 
     def __init__(self, name, node_id, clock=None, names=None, listener=None):
+        """clock() -> ticks in ms (default: the runtime's); listener(ev), if given, is the first listener."""
         self.name = name
         self.node_id = node_id
         self.clock = clock if clock is not None else ticks_ms
         self.names = names if names is not None else NameTable()
         self.names.add(name, node_id)
-        self.listener = listener
+        self.listeners = [listener] if listener is not None else []
         self.links = {}
         self._streams = {}
         self._pumps = {}  # link name -> the frame port's pump, or None
@@ -50,8 +52,8 @@ class Node:
         # reads and writes that raised OSError (an unplugged USB adapter, a
         # UART error): the link goes on without those bytes
         self.stream_errors = 0
-        # the transport (acomm.transport.Transport) sets itself here: it gets
-        # the links' SEGMENT frames and the statuses of its own requests
+        # the transport (acomm.transport.Transport, attach()): it gets the
+        # links' SEGMENT frames and the statuses of its own requests
         self.transport = None
         self._now = 0
 
@@ -70,6 +72,25 @@ class Node:
         self.guard = guard if auth is not None else None
         for name in self.links:
             self._secure(self.links[name])
+        if self.transport is not None:
+            self.transport.guard = self.guard
+            self.transport.auth = auth
+
+    def attach(self, transport):
+        """Makes transport (acomm.transport.Transport) this node's: it gets the links' segments and
+        its requests' statuses, is polled by step(), and shares the node's key and command policy."""
+        self.transport = transport
+        transport.guard = self.guard
+        transport.auth = self.auth
+
+    def listen(self, fn):
+        """Adds fn(ev) to the listeners: it gets every event from now on, after those added before."""
+        self.listeners.append(fn)
+
+    def unlisten(self, fn):
+        """Removes fn from the listeners (nothing when it is not one)."""
+        if fn in self.listeners:
+            self.listeners.remove(fn)
 
     def _secure(self, link):
         link.framing.set_auth(self.auth)
@@ -102,8 +123,13 @@ class Node:
                 return
             if code == _EV_STATUS and t.on_link_status(self._now, ev[2], ev[3], ev[4]):
                 return
-        if self.listener is not None:
-            self.listener(ev)
+        self.emit(ev)
+
+    def emit(self, ev):
+        """Gives ev (acomm.events) to every listener; with none, to the backlog (take_events())."""
+        if self.listeners:
+            for fn in self.listeners:
+                fn(ev)
             return
         if len(self.backlog) >= _EVENT_BACKLOG:
             self.backlog.pop(0)

@@ -42,8 +42,7 @@ class Station:
         self._due = None
         self.stats = {"reports": 0, "alarms": 0, "chats": 0, "commands": 0, "received": 0, "inbox_dropped": 0,
                       "refused": 0}
-        self._chain = node.listener
-        node.listener = self._on_event
+        node.listen(self._on_event)
 
     # -- sending ----------------------------------------------------------------
     def _send(self, now, dst, data, prio, what):
@@ -87,8 +86,6 @@ class Station:
         if ev[0] == EV_PACKET:
             self.stats["received"] += 1
             self._keep(ev[1], ev[3])
-        if self._chain is not None:
-            self._chain(ev)
 
     def _keep(self, src, data):
         try:

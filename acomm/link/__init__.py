@@ -7,7 +7,7 @@
 # payloads (raw acomm frames on links without addressing or integrity, the
 # one-byte elided header on modems that have both), acknowledges frames on
 # raw links, suppresses duplicates, and runs node discovery. The ranging job
-# is in linkrange (a mixin). set_reply() leaves a frame in a modem that
+# is at the end of the class. set_reply() leaves a frame in a modem that
 # answers interrogations by itself; overhear=True hands up DATA frames
 # addressed to other nodes (passive listening), never acknowledging them.
 #
@@ -20,16 +20,15 @@
 # at once. Events go to `listener(event_tuple)` (see acomm.events).
 
 from .. import frame as fr
-from ..drivers.caps import CAP_ADDRESSING, CAP_DISCOVERY, CAP_RELIABLE
+from ..drivers.caps import CAP_ADDRESSING, CAP_DISCOVERY, CAP_RANGING, CAP_RELIABLE
 from ..compat import const, ticks_add, ticks_diff
 from .acktable import AckTable
 from .dedup import DuplicateFilter
 from .framing import LinkFraming
-from .ranging import MAX_LIFESPAN_MS, SLOT_IDLE, SLOT_SENDING, Ranging
 from .discovery import Discovery, decode_advert, encode_advert
 from ..errors import AcommError, DecodeError
 from .names import AddressMap
-from .txqueue import TxQueue, TxRequest
+from .txqueue import MAX_LIFESPAN_MS, TxQueue, TxRequest
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -42,6 +41,7 @@ _EV_DELIVERED = const(3)
 _EV_DRIVER_DOWN = const(7)
 _EV_DRIVER_UP = const(6)
 _EV_RANGE = const(5)
+_EV_RANGE_RECEIVED = const(24)
 _EV_RECEIVED = const(21)
 _EV_REFUSED = const(28)
 _EV_SEGMENT = const(25)
@@ -60,8 +60,8 @@ _WAITING = const(3)
 
 BROADCAST = "*"  # destination name meaning every node on the link
 _MAX_PENDING_ACKS = const(4)
-_IDLE = SLOT_IDLE
-_SENDING = SLOT_SENDING
+_IDLE = const(0)  # the transmission slot's states
+_SENDING = const(1)  # a frame or ping is on the air
 
 
 class _Inflight:
@@ -84,7 +84,7 @@ class _Inflight:
         self.kind = 0  # 0 data, 1 advert, 2 link ack, 3 ping
 
 
-class Link(Ranging):
+class Link:
     def __init__(
         self,
         name,
@@ -590,3 +590,78 @@ class Link(Ranging):
               f.payload)
         # with a key, whether the frame's tag verified
         self._emit(ev if self.guard is None else ev + (f.authed,))
+
+    # -- ranging (seed 000's ranging request and range received) ------------------
+    def range(self, now, req_id, names, lifespan_s, priority=2):
+        """Pings each node named; EV_RANGE_RECEIVED (metres, None where none answered), then a final status."""
+        if not self.driver.caps.has(CAP_RANGING):
+            return self._refuse(req_id, "%s cannot measure range" % self.name)
+        if req_id in self._active:
+            return self._refuse(req_id, "request id %d is already in use" % req_id)
+        life_ms = int(lifespan_s * 1000)
+        if life_ms <= 0 or life_ms > MAX_LIFESPAN_MS:
+            return self._refuse(req_id, "lifespan must be positive and below %d s" % (MAX_LIFESPAN_MS // 1000))
+        if not names:
+            return self._refuse(req_id, "no node to range")
+        ids = []
+        for n in names:
+            try:
+                nid = self._resolve(n)
+            except AcommError as e:
+                return self._refuse(req_id, str(e))
+            if nid is None:
+                return self._refuse(req_id, "cannot range the broadcast address")
+            ids.append(nid)
+        req = TxRequest(req_id, None, priority, ticks_add(now, life_ms), b"")
+        # meta: [-2 marks ranging, (ids, results, next index)]
+        req.meta = [-2, (ids, [None] * len(ids), [0])]
+        return self._enqueue(req, now)
+
+    def _ping_next(self, now):
+        fl = self._fl
+        req = fl.req
+        ids, _, idx = req.meta[1]
+        nid = ids[idx[0]]
+        fl.kind = 3
+        fl.state = _SENDING
+        if idx[0] == 0:
+            self._status(req.req_id, _TRANSMITTING)
+        self._last_tx = now
+        try:
+            fl.handle = self.driver.ping(now, self.addr_map.addr_of(nid))
+        except AcommError:
+            fl.handle = None
+            self._range_result(now, None)  # this node gets no range; go on
+
+    def _range_result(self, now, metres):
+        fl = self._fl
+        req = fl.req
+        ids, results, idx = req.meta[1]
+        results[idx[0]] = metres
+        idx[0] += 1
+        if fl.canceled:
+            fl.clear()
+            return
+        if idx[0] < len(ids) and ticks_diff(now, req.deadline) < 0:
+            # the job stays in the slot (kind 3, state idle); poll() sends the
+            # next ping when the driver is ready
+            fl.state = _IDLE
+            if self.driver.ready(now):
+                self._ping_next(now)
+            return
+        self._finish_range(req)
+
+    def _finish_range(self, req):
+        ids, results, _ = req.meta[1]
+        self._fl.clear()
+        names = [self.names.name_of(i) for i in ids]
+        self._emit((_EV_RANGE_RECEIVED, self, req.req_id, names, results))
+        got = 0
+        for r in results:
+            if r is not None:
+                got += 1
+        if got:
+            self._final(req, _DELIVERED, "%d of %d ranges" % (got, len(ids)))
+        else:
+            self._final(req, _FAILED, "no range reply")
+

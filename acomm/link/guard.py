@@ -28,7 +28,7 @@ from ..frame.auth import KEY_CMD
 from ..errors import AcommError
 from ..frame import ACK, ADVERT, REPLY, SEGMENT
 
-UNSEALED_RX = 2  # reassemblies unsealed fragments may hold at a time (of acomm.transport.receive's 8)
+UNSEALED_RX = 2  # reassemblies unsealed fragments may hold at a time (of the transport's 8)
 _SACK_BIT = 8  # acomm.transport.segment: K, in the frame's sequence field
 
 

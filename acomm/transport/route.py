@@ -32,14 +32,15 @@ MEDIUM_ALL = "all"
 
 
 class Router:
-    def __init__(self, node, routes=None, urgent=4):
-        self.node = node
+    def __init__(self, names, links, routes=None, urgent=4):
+        self.names = names
+        self.node_links = links  # link name -> Link, the node's (read live)
         self.routes = dict(routes or {})  # final destination name -> next hop name
         self.urgent = urgent
         self._stalled = {}  # (link name, hop id) -> ticks when the transport gave up there
 
     def next_hop(self, final):
-        names = self.node.names
+        names = self.names
         hop_name = self.routes.get(names.name_of(final))
         if hop_name is None:
             return final
@@ -48,8 +49,9 @@ class Router:
     def links(self, medium):
         # the links a medium allows, in the node's order
         out = []
-        for name in self.node.links:
-            link = self.node.links[name]
+        links = self.node_links
+        for name in links:
+            link = links[name]
             if medium is None or medium == MEDIUM_ANY or medium == MEDIUM_ALL or medium == name or medium == link.medium:
                 out.append(link)
         return out

@@ -11,7 +11,7 @@ CONFIG = {
     "peers": {"diver": 2, "shore": 3, "auv": 4},
     "routes": {},
     # 64 KiB of the Pico's flash filesystem for packets waiting to be sent
-    "storage": {"path": "/data/acomm.transport.store", "capacity": 65536, "max_record": 256},
+    "storage": {"path": "/data/acomm.store", "capacity": 65536, "max_record": 256},
     "max_packet": 4096,
     "watchdog_ms": 8000,  # the RP2040's watchdog tops out at 8.3 s
     "links": [

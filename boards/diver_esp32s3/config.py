@@ -8,7 +8,7 @@ CONFIG = {
     "arch": "xtensawin",  # mpy-cross -march for the ESP32-S3
     "peers": {"buoy": 1, "shore": 3, "auv": 4},
     "routes": {"shore": "buoy"},
-    "storage": {"path": "/data/acomm.transport.store", "capacity": 32768, "max_record": 256},
+    "storage": {"path": "/data/acomm.store", "capacity": 32768, "max_record": 256},
     "max_packet": 2048,
     "watchdog_ms": 10000,
     "links": [

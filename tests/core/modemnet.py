@@ -94,7 +94,7 @@ class Net:
         return self.nodes[src].send("acoustic", dst, data, life, 2, ack)
 
     def rec(self, name):
-        return self.nodes[name].listener
+        return self.nodes[name].listeners[0]
 
     def received(self, name):
         return [(e[2], e[3], bytes(e[4])) for e in self.rec(name).of(EV_RECEIVED)]

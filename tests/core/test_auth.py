@@ -186,7 +186,7 @@ def test_a_command_in_a_transport_packet_needs_every_fragment_authenticated():
     w, n = _net()
     wall = lambda: w.now() // 1000  # noqa: E731
     for name in n:
-        Transport(n[name].node, wall=wall)
+        Transport.of(n[name].node, wall=wall)
     # an attacker sends its fragments without waiting for the lane probe
     # of a node's first transfer (acomm.transport.arq.Outgoing.probe), which it could
     # not hear the answer to anyway

@@ -168,7 +168,7 @@ def _net(strict=True):
     for name, nid, x in (("auv", 1, 5000), ("topside", 2, 100)):
         nodes[name] = w.add(name, nid, "seatrac", position=(x, 0, 5), link_opts={"advert_period_ms": 600000})
         nodes[name].node.set_auth(Auth(KEY), commands(), strict=strict)
-        Transport(nodes[name].node, wall=lambda: w.now() // 1000)
+        Transport.of(nodes[name].node, wall=lambda: w.now() // 1000)
     return w, nodes["topside"], nodes["auv"]
 
 

@@ -125,7 +125,7 @@ def test_buddy_sends_the_longer_messages_when_it_sees_the_diver():
     cyc.stop()
     n = cyc.cycles
     wd.run(20000)
-    assert cyc.cycles == n and wd.nodes["buoy"].node.listener == wd.nodes["buoy"].events.append
+    assert cyc.cycles == n and wd.nodes["buoy"].node.listeners == [wd.nodes["buoy"].events.append]
 
 
 def test_replies_count_as_being_heard_so_adverts_do_not_cut_into_the_cycle():

@@ -240,7 +240,7 @@ def test_nodes_discover_by_multicast_then_talk_unicast():
     net = FakeNet(GROUP)
     a, b = _nodes(net)
     t = _run((a, b), 0, 200)
-    assert "node-2" in [e[2] for e in a.listener.of(EV_AVAILABILITY) if e[3] == AVAILABLE]
+    assert "node-2" in [e[2] for e in a.listeners[0].of(EV_AVAILABILITY) if e[3] == AVAILABLE]
     assert a.links["ip"].driver.learned() == {2: ("10.0.0.2", 4002)}
     sent = []
 
@@ -253,10 +253,10 @@ def test_nodes_discover_by_multicast_then_talk_unicast():
     r2 = a.send("ip", "node-2", b"plain", 10, now=t)
     r3 = b.send("ip", BROADCAST, b"to all", 10, now=t)
     t = _run((a, b), t, t + 300)
-    assert a.listener.final(r1) == DELIVERED and a.listener.final(r2) == TRANSMITTED
-    assert b.listener.final(r3) == TRANSMITTED
-    got_b = [bytes(e[4]) for e in b.listener.of(EV_RECEIVED)]
-    got_a = [bytes(e[4]) for e in a.listener.of(EV_RECEIVED)]
+    assert a.listeners[0].final(r1) == DELIVERED and a.listeners[0].final(r2) == TRANSMITTED
+    assert b.listeners[0].final(r3) == TRANSMITTED
+    got_b = [bytes(e[4]) for e in b.listeners[0].of(EV_RECEIVED)]
+    got_a = [bytes(e[4]) for e in a.listeners[0].of(EV_RECEIVED)]
     assert got_b == [b"acked", b"plain"] and got_a == [b"to all"]
     # unicast frames went to b's endpoint, not to the group
     assert sent.count(("10.0.0.2", 4002)) >= 2
@@ -282,11 +282,11 @@ def test_garbage_and_impostors_are_counted_and_nodes_keep_working():
     net.inject(C, ("10.0.0.1", 4001), raw(2, 1, b"I am node 2"))
     t = _run((a, b), t, t + 50)
     assert da.stats["rx_refused"] == 1
-    assert b"I am node 2" not in [bytes(e[4]) for e in a.listener.of(EV_RECEIVED)]
+    assert b"I am node 2" not in [bytes(e[4]) for e in a.listeners[0].of(EV_RECEIVED)]
     r = a.send("ip", "node-2", b"still fine", 10, ack=True, now=t)
     t = _run((a, b), t, t + 300)
-    assert a.listener.final(r) == DELIVERED
-    assert [bytes(e[4]) for e in b.listener.of(EV_RECEIVED)] == [b"still fine"]
+    assert a.listeners[0].final(r) == DELIVERED
+    assert [bytes(e[4]) for e in b.listeners[0].of(EV_RECEIVED)] == [b"still fine"]
     assert la.stats["rx_bad"] == 0  # the driver stopped garbage before the link
 
 
@@ -299,7 +299,7 @@ def test_every_request_ends_once_when_the_port_fails():
     rids = [a.send("ip", "node-2", b"m%d" % i, 1, ack=(i % 2 == 0), now=t) for i in range(4)]
     rids.append(a.send("ip", "node-9", b"nobody", 1, now=t))  # never heard of
     t = _run((a, b), t, t + 1500)
-    rec = a.listener
+    rec = a.listeners[0]
     check_exactly_one_final(rec, rids)
     assert [rec.final(r) for r in rids] == [FAILED] * 5
     assert "unreachable" in rec.reasons(rids[1])[-1]
@@ -327,11 +327,11 @@ def test_requests_wait_while_disconnected_and_expire_or_flow():
     short = n.send("tcp", "srv", b"short", 0.5, now=0)
     long_ = n.send("tcp", "srv", b"long", 10, now=0)
     _run((n,), 0, 1000)
-    assert n.listener.final(short) == EXPIRED and n.listener.final(long_) is None
+    assert n.listeners[0].final(short) == EXPIRED and n.listeners[0].final(long_) is None
     assert port.out == []
     d.connection_up(1000, ("srv", 1), default=True)
     _run((n,), 1000, 1100)
-    assert n.listener.final(long_) == TRANSMITTED
+    assert n.listeners[0].final(long_) == TRANSMITTED
     payloads = [fr.decode_raw(x[1]).payload for x in port.out]
     assert b"long" in payloads and b"short" not in payloads
-    check_exactly_one_final(n.listener, [short, long_])
+    check_exactly_one_final(n.listeners[0], [short, long_])

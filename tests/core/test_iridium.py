@@ -370,7 +370,7 @@ def test_transport_carries_a_packet_over_iridium_in_link_sized_fragments():
     ends = [w.add(n, i, "iridium", link="satellite", emu_opts=sat, driver_opts=drv, link_opts=quiet)
             for n, i in (("buoy", 1), ("shore", 2))]
     for sn in ends:
-        Transport(sn.node, wall=lambda: w.now() // 1000)
+        Transport.of(sn.node, wall=lambda: w.now() // 1000)
     assert w.run(10000, until=lambda: all(sn.driver.ready(w.now()) for sn in ends))
     data = Prng(9).bytes(1000)
     ends[0].node.transport.send(w.now(), "shore", data, 3600, 5)

@@ -49,8 +49,8 @@ def test_the_mtu_leaves_room_for_the_parity():
 def test_the_transport_runs_over_a_link_with_fec():
     w, a, b = _pair(8)
     wall = wall_of(w)
-    ta = Transport(a.node, wall=wall)
-    Transport(b.node, wall=wall)
+    ta = Transport.of(a.node, wall=wall)
+    Transport.of(b.node, wall=wall)
     data = Prng(6).bytes(500)
     pid = ta.send(w.now(), "buoy", data, 3600, 5)
     assert w.run(600000, until=lambda: DELIVERED in statuses(a, pid))

@@ -24,11 +24,11 @@ def test_two_nodes_on_asyncio_real_time():
     t0 = ticks_ms()
 
     def done():
-        return diver.listener.final(rid) is not None or ticks_diff(ticks_ms(), t0) > 5000
+        return diver.listeners[0].final(rid) is not None or ticks_diff(ticks_ms(), t0) > 5000
 
     async def main():
         await asyncio.gather(buoy.run(2, done), diver.run(2, done))
 
     asyncio.run(main())
-    assert diver.listener.final(rid) == DELIVERED
-    assert [bytes(e[4]) for e in buoy.listener.of(EV_RECEIVED)] == [b"hello from below"]
+    assert diver.listeners[0].final(rid) == DELIVERED
+    assert [bytes(e[4]) for e in buoy.listeners[0].of(EV_RECEIVED)] == [b"hello from below"]

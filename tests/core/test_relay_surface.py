@@ -23,9 +23,9 @@ def test_the_buoy_forwards_acoustic_packets_to_shore_over_iridium():
                   link_opts=SAT_LINK)
     w.add_link("buoy", "satellite", "iridium", driver_opts=SAT_DRIVER, emu_opts=SAT_EMU, link_opts=SAT_LINK)
     wall = wall_of(w)
-    td = Transport(diver.node, routes={"shore": "buoy"}, wall=wall)
-    tb = Transport(buoy.node, wall=wall)
-    Transport(shore.node, wall=wall)
+    td = Transport.of(diver.node, routes={"shore": "buoy"}, wall=wall)
+    tb = Transport.of(buoy.node, wall=wall)
+    Transport.of(shore.node, wall=wall)
     w.run(15000)
     log = Prng(21).bytes(400)  # a dive log that does not compress
     pid = td.send(w.now(), "shore", log, 7200, 6)

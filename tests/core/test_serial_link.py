@@ -52,10 +52,10 @@ def test_unicast_with_link_ack_and_broadcast():
     r1 = diver.send("radio", "buoy", b"depth 12.5 m", 30, priority=2, ack=True)
     r2 = buoy.send("radio", BROADCAST, b"surface in 5 min", 30, priority=2)
     run((buoy, diver), clk, 3000)
-    assert diver.listener.final(r1) == DELIVERED
-    assert buoy.listener.final(r2) == TRANSMITTED
-    got_b = [(e[2], e[3], bytes(e[4])) for e in buoy.listener.of(EV_RECEIVED)]
-    got_d = [(e[2], e[3], bytes(e[4])) for e in diver.listener.of(EV_RECEIVED)]
+    assert diver.listeners[0].final(r1) == DELIVERED
+    assert buoy.listeners[0].final(r2) == TRANSMITTED
+    got_b = [(e[2], e[3], bytes(e[4])) for e in buoy.listeners[0].of(EV_RECEIVED)]
+    got_d = [(e[2], e[3], bytes(e[4])) for e in diver.listeners[0].of(EV_RECEIVED)]
     assert got_b == [("diver", "buoy", b"depth 12.5 m")]
     assert got_d == [("buoy", BROADCAST, b"surface in 5 min")]
 
@@ -70,11 +70,11 @@ def test_noise_between_frames_is_counted_and_link_keeps_going():
     b.inject(slip.encode(b"\x40\x01\x21bad crc!!"))
     r2 = buoy.send("radio", "diver", b"two", 30, ack=True)
     run((buoy, diver), clk, 1000)
-    assert buoy.listener.final(r1) == DELIVERED
-    assert buoy.listener.final(r2) == DELIVERED
+    assert buoy.listeners[0].final(r1) == DELIVERED
+    assert buoy.listeners[0].final(r2) == DELIVERED
     link = diver.links["radio"]
     assert link.stats["rx_bad"] >= 2
-    assert [bytes(e[4]) for e in diver.listener.of(EV_RECEIVED)] == [b"one", b"two"]
+    assert [bytes(e[4]) for e in diver.listeners[0].of(EV_RECEIVED)] == [b"one", b"two"]
 
 
 def test_frames_for_other_nodes_are_counted_not_delivered():
@@ -83,8 +83,8 @@ def test_frames_for_other_nodes_are_counted_not_delivered():
     buoy, diver, auv = nodes
     rid = buoy.send("radio", "diver", b"for the diver", 30, ack=True)
     run(nodes, clk, 2000)
-    assert buoy.listener.final(rid) == DELIVERED
-    assert auv.listener.of(EV_RECEIVED) == []
+    assert buoy.listeners[0].final(rid) == DELIVERED
+    assert auv.listeners[0].of(EV_RECEIVED) == []
     assert auv.links["radio"].stats["rx_not_for_us"] >= 1
 
 
@@ -94,7 +94,7 @@ def test_three_nodes_discover_each_other_and_notice_loss():
     run(nodes, clk, 200, skip=nodes[1:])  # the buoy powers on first
     run(nodes, clk, 9000)
     for n in nodes:
-        seen = set(e[2] for e in n.listener.of(EV_AVAILABILITY) if e[3] == AVAILABLE)
+        seen = set(e[2] for e in n.listeners[0].of(EV_AVAILABILITY) if e[3] == AVAILABLE)
         assert seen == set(nm for nm, _ in NAMES) - {n.name}, (n.name, seen)
     # the AUV falls silent (dives out of range): the others notice
     buoy, diver, auv = nodes
@@ -132,16 +132,16 @@ def test_every_request_gets_exactly_one_final_status_under_faults():
         clk.advance(5)
     run((buoy, diver), clk, 10000)  # let every lifespan run out
     for n in (buoy, diver):
-        check_exactly_one_final(n.listener, ids[n])
+        check_exactly_one_final(n.listeners[0], ids[n])
         assert not n.links["radio"]._active
         # a frame is delivered to the application at most once
-        for e in n.listener.of(EV_RECEIVED):
+        for e in n.listeners[0].of(EV_RECEIVED):
             p = bytes(e[4])
             sent_payloads[p] += 1
             assert sent_payloads[p] == 1, p
     finals = {}
     for n in (buoy, diver):
-        for e in n.listener.of(EV_STATUS):
+        for e in n.listeners[0].of(EV_STATUS):
             if is_final(e[3]):
                 finals[e[3]] = finals.get(e[3], 0) + 1
     assert len(finals) >= 4  # the faults really produced a mix of outcomes
@@ -195,8 +195,8 @@ def test_short_writes_lose_nothing():
     buoy, diver = make_nodes((ShortWriter(a), b), clk, advert_period_ms=600000)
     rid = buoy.send("radio", "diver", b"a longer message than three bytes", 30, ack=True)
     run((buoy, diver), clk, 3000)
-    assert buoy.listener.final(rid) == DELIVERED
-    assert [bytes(e[4]) for e in diver.listener.of(EV_RECEIVED)] == [b"a longer message than three bytes"]
+    assert buoy.listeners[0].final(rid) == DELIVERED
+    assert [bytes(e[4]) for e in diver.listeners[0].of(EV_RECEIVED)] == [b"a longer message than three bytes"]
 
 
 def test_own_frames_heard_back_are_not_received():
@@ -206,9 +206,9 @@ def test_own_frames_heard_back_are_not_received():
     b.peers.append(b)  # the diver's radio hears itself
     diver.send("radio", BROADCAST, b"echo", 30)
     run((buoy, diver), clk, 1000)
-    assert diver.listener.of(EV_RECEIVED) == []
+    assert diver.listeners[0].of(EV_RECEIVED) == []
     assert diver.links["radio"].stats["rx_own"] >= 1
-    assert [bytes(e[4]) for e in buoy.listener.of(EV_RECEIVED)] == [b"echo"]
+    assert [bytes(e[4]) for e in buoy.listeners[0].of(EV_RECEIVED)] == [b"echo"]
 
 
 def test_a_link_without_a_stream_keeps_running():
@@ -251,9 +251,9 @@ def test_a_stream_that_raises_does_not_stop_the_node():
     r1 = diver.send("radio", "buoy", b"while unplugged", 5, priority=2, ack=True)
     run((buoy, diver), clk, 8000)  # raises out of step() without the fix
     assert diver.stream_errors > 0
-    assert diver.listener.final(r1) is not None  # it still got its final status
+    assert diver.listeners[0].final(r1) is not None  # it still got its final status
     cable.out = False
     r2 = diver.send("radio", "buoy", b"plugged back", 30, priority=2, ack=True)
     run((buoy, diver), clk, 5000)
-    assert diver.listener.final(r2) == DELIVERED
-    assert [bytes(e[4]) for e in buoy.listener.of(EV_RECEIVED)] == [b"plugged back"]
+    assert diver.listeners[0].final(r2) == DELIVERED
+    assert [bytes(e[4]) for e in buoy.listeners[0].of(EV_RECEIVED)] == [b"plugged back"]

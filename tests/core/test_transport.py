@@ -80,13 +80,13 @@ def test_expiry_and_recovery_from_the_store():
     a = w.add("diver", 2, "seatrac", position=(0, 0, 10))
     w.add("buoy", 1, "seatrac", position=(100, 0, 0))
     wall = lambda: w.now() // 1000  # noqa: E731
-    t = Transport(a.node, store=store, wall=wall)
+    t = Transport.of(a.node, store=store, wall=wall)
     p1 = t.send(w.now(), "buoy", b"one", 5, 5)
     p2 = t.send(w.now(), "buoy", b"two", 3600, 5)
     assert len(store.keys()) == 3  # the two packets and the packet id limit
     # the node restarts before anything went: a new transport on the same store
     a.node.transport = None
-    t2 = Transport(a.node, store=store, wall=wall)
+    t2 = Transport.of(a.node, store=store, wall=wall)
     assert sorted(t2.pending()) == sorted([p1, p2])
     assert t2.send(w.now(), "buoy", b"three", 60, 5) not in (p1, p2)  # ids are not reused
     w.run(8000)

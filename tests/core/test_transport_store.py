@@ -18,7 +18,7 @@ from transportnet import net, packets, statuses, wall_of
 def _restart(sn, w, store, **kw):
     # the node comes back: a new transport on the same store
     sn.node.transport = None
-    return Transport(sn.node, store=store, wall=wall_of(w), **kw)
+    return Transport.of(sn.node, store=store, wall=wall_of(w), **kw)
 
 
 def test_a_restart_on_a_file_store_resumes_the_transfer():

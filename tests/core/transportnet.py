@@ -25,10 +25,10 @@ def net(loss=0.0, relay=False, seed=1, stores=None):
     b = w.add("buoy", 1, "seatrac", position=(300 if relay else 150, 0, 0), link_opts=QUIET)
     c = w.add("auv", 3, "seatrac", position=(150, 0, 5), link_opts=QUIET) if relay else None
     stores = stores or {}
-    ta = Transport(a.node, store=stores.get("diver"), routes={"buoy": "auv"} if relay else None, wall=wall_of(w))
-    Transport(b.node, store=stores.get("buoy"), routes={"diver": "auv"} if relay else None, wall=wall_of(w))
+    ta = Transport.of(a.node, store=stores.get("diver"), routes={"buoy": "auv"} if relay else None, wall=wall_of(w))
+    Transport.of(b.node, store=stores.get("buoy"), routes={"diver": "auv"} if relay else None, wall=wall_of(w))
     if c is not None:
-        Transport(c.node, store=stores.get("auv"), wall=wall_of(w))
+        Transport.of(c.node, store=stores.get("auv"), wall=wall_of(w))
     w.run(15000)
     return w, a, b, c, ta
 

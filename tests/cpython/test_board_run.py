@@ -44,7 +44,7 @@ def test_the_diver_board_runs_against_an_emulated_beacon(tmp_path):
             for p in (buoy, diver):
                 rc, err = p.finish()
                 assert rc == 0 and "Traceback" not in err, (err, p.lines)
-    assert os.path.isfile(str(tmp_path / "store" / "acomm.transport.store"))
+    assert os.path.isfile(str(tmp_path / "store" / "acomm.store"))
 
 
 def test_board_errors_are_named(tmp_path):

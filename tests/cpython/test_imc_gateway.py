@@ -20,7 +20,7 @@ def _net(names=None):
     gws = []
     for sn, imc_id in ((a, 0x4001), (b, 0x4002)):
         gw = ImcGateway(sn.node, imc_id, names=names)
-        sn.node.listener = gw.on_event
+        sn.node.listen(gw.on_event)
         gws.append(gw)
     w.run(5000)  # past the first adverts, which would collide with the first request
     return w, gws[0], gws[1]

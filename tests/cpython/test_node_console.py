@@ -147,8 +147,8 @@ def test_a_file_through_the_transport_and_ctrl_c_with_a_persistent_store(tmp_pat
     from acomm.transport.store import Store
     from acomm.transport import Transport
 
-    with Store(str(tmp_path / "store" / "acomm.transport.store"), capacity_bytes=1 << 22) as s:
-        assert Transport(Node("buoy", 1), store=s).pending() == [2]
+    with Store(str(tmp_path / "store" / "acomm.store"), capacity_bytes=1 << 22) as s:
+        assert Transport.of(Node("buoy", 1), store=s).pending() == [2]
 
 
 def test_commands_from_a_pipe_are_waited_for(tmp_path):

@@ -145,7 +145,7 @@ def main(args):
     if args.store:
         st = cfg["storage"] or {"capacity": 1 << 22, "max_record": 1024}
         # the config's flash path becomes a file in --store (auth counters beside it)
-        cfg["storage"] = dict(st, path=os.path.join(args.store, "acomm.transport.store"))
+        cfg["storage"] = dict(st, path=os.path.join(args.store, "acomm.store"))
 
         def store_open(s):
             return nodeloop.open_store(args.store, s["capacity"], s["max_record"])

@@ -67,9 +67,13 @@ def _gateways(args, nodes):
     for node in nodes:
         gw = ImcGateway(node, args.imc_id + node.node_id, names=names, static=static, lifespan_s=args.lifespan,
                         announce_ms=int(args.announce_period * 1000), ip_clock=ticks_ms)
-        node.listener = gw.on_event
+        node.listen(gw.on_event)
         out.append(gw)
     return out
+
+
+def _ignore(ev):
+    pass
 
 
 def build_sim(args):
@@ -79,7 +83,9 @@ def build_sim(args):
     world = World(seed=args.seed)
     nodes = []
     for i, (name, nid) in enumerate(specs):
-        sn = world.add(name, int(nid), args.sim_modem, position=(i * args.distance, 0, 5 if i else 0))
+        # the gateway is the node's listener (_gateways): the world keeps no event list
+        sn = world.add(name, int(nid), args.sim_modem, position=(i * args.distance, 0, 5 if i else 0),
+                       listener=_ignore)
         nodes.append(sn.node)
     t0 = time.monotonic()
     sim0 = world.now()

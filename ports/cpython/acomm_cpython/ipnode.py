@@ -211,13 +211,13 @@ def main(args):
         store = nodeloop.open_store(args.store) if args.store else None
         if store is not None:
             closers.append(store)
-        transport = Transport(node, store=store)
+        transport = Transport.of(node, store=store)
         if args.inbox:
             import os
 
             os.makedirs(args.inbox, exist_ok=True)
         console = Console(node, transport, out, args.lifespan, args.inbox, wheres)
-        node.listener = console.on_event
+        node.listen(console.on_event)
         nodeloop.wait_started(node.step, watches, out, args.startup_timeout)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         pending = [keyval(m) for m in args.send]

@@ -140,7 +140,7 @@ def open_store(path_dir, capacity=1 << 22, max_record=1024):
     from acomm.transport.store import Store
 
     os.makedirs(path_dir, exist_ok=True)
-    return Store(os.path.join(path_dir, "acomm.transport.store"), capacity_bytes=capacity, max_record=max_record)
+    return Store(os.path.join(path_dir, "acomm.store"), capacity_bytes=capacity, max_record=max_record)
 
 
 def open_log(path):

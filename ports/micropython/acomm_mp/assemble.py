@@ -99,7 +99,7 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         node.add_link(lk["name"], drv, open_uart(lk), **opts)
     st = cfg["storage"]
     store = open_store(st) if st is not None and open_store is not None else MemoryStore()
-    transport = Transport(node, store=store, routes=cfg["routes"], wall=wall, max_packet=cfg["max_packet"])
+    transport = Transport.of(node, store=store, routes=cfg["routes"], wall=wall, max_packet=cfg["max_packet"])
     station = None
     sc = cfg["station"]
     if sc is not None:

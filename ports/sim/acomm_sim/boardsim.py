@@ -74,7 +74,7 @@ def add_peers(w, cfg, peers, via, wall):
         routes = {}
         if via is not None and name in via:
             routes[via[name]] = cfg["name"]
-        others[name] = (p, Transport(p.node, routes=routes, wall=wall))
+        others[name] = (p, Transport.of(p.node, routes=routes, wall=wall))
         k += 1
     return others
 

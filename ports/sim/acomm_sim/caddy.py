@@ -25,7 +25,7 @@
 #   cyc = CaddyCycle(world, pladypos="buoy", buddy="auv", diver="diver")
 #   cyc.start(now)        # joins the world's tasks, queues the replies
 #   world.run(...)
-#   cyc.stop()            # leaves the tasks, gives the nodes their listeners back
+#   cyc.stop()            # leaves the tasks, takes its listeners off the nodes
 #   cyc.cycles            # complete cycles (PlaDyPos starting step 0 again)
 #   cyc.cycle_times_ms    # the time of each, start to start
 #   cyc.counters[k]       # step k: asked, delivered, failed, replies,
@@ -97,7 +97,7 @@ class _Agent:
         self.schedule = Interrogation(sn.name, steps)
         self.inbox = []
         self.rid = None  # our request under way
-        self.listener = None
+        self.listener = None  # ours on the node, while the cycle runs
         self.overheard = False  # the link's own overhear setting, given back at stop
 
 
@@ -136,8 +136,8 @@ class CaddyCycle:
             a = _Agent(role, sn, self.link_name, self.steps)
             a.overheard = a.link.overhear
             a.link.overhear = True
-            a.listener = sn.node.listener
-            sn.node.listener = self._listener(a)
+            a.listener = self._listener(a)
+            sn.node.listen(a.listener)
             a.schedule.start(now)
             self.agents[role] = a
             self._queue_reply(a, now)
@@ -148,7 +148,7 @@ class CaddyCycle:
 
     def stop(self):
         for a in self.agents.values():
-            a.sn.node.listener = a.listener
+            a.sn.node.unlisten(a.listener)
             a.link.overhear = a.overheard
             a.schedule.stop()
         if self._running:
@@ -158,8 +158,6 @@ class CaddyCycle:
     def _listener(self, a):
         def on_event(ev):
             a.inbox.append(ev)
-            if a.listener is not None:
-                a.listener(ev)
 
         return on_event
 

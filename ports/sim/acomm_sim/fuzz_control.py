@@ -104,7 +104,7 @@ def _node():
     node.names.add("peer", 2)
     node.set_auth(Auth(KEY), commands())
     link = node.add_link("acoustic", _Modem(), advert_period_ms=600000, queue_capacity=8)
-    Transport(node, wall=lambda: 1000)
+    Transport.of(node, wall=lambda: 1000)
     return node, link, events
 
 

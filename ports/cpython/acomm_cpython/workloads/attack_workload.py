@@ -57,7 +57,7 @@ from acomm.link.dedup import DuplicateFilter
 from acomm.drivers.mac import Tdma
 from acomm.prng import Prng
 from acomm.transport import Transport
-from acomm.transport.receive import _MAX_RX
+from acomm.transport import _MAX_RX
 from acomm_sim.attacker import Attacker
 from acomm_sim.channel import Channel
 from acomm_sim.ledger import Ledger
@@ -102,7 +102,7 @@ class Attack(Forger):
                        link_opts={"advert_period_ms": 60000, "queue_capacity": 64, "max_retries": 100},
                        listener=self._listener(name))
             sn.node.set_auth(Auth(KEY, path=self._counters(name)), commands(), strict=strict)
-            Transport(sn.node, wall=lambda: w.now() // 1000)
+            Transport.of(sn.node, wall=lambda: w.now() // 1000)
             sn.step = self._stepper(sn)
             self.sn[name] = sn
         self._spy_sacks()

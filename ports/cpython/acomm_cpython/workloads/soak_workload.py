@@ -128,7 +128,7 @@ class Soak:
         # tests' business), and 24 h of fsyncs would cost minutes
         store = Store(os.path.join(self.dir, name + ".store"), capacity_bytes=STORE_BYTES[name], max_record=256,
                       sync=False)
-        Transport(node, store=store, wall=self.walls[name])
+        Transport.of(node, store=store, wall=self.walls[name])
         return node
 
     def _stepper(self, name):

@@ -51,8 +51,8 @@ def ideal_bps(driver, loss):
 def run_acomm(modem, loss, seed=1):
     w, a, b = _world(modem, loss, seed)
     wall = lambda: w.now() // 1000  # noqa: E731
-    ta = Transport(a.node, wall=wall, compress=False)
-    Transport(b.node, wall=wall, compress=False)
+    ta = Transport.of(a.node, wall=wall, compress=False)
+    Transport.of(b.node, wall=wall, compress=False)
     data = Prng(seed).bytes(SIZE)
     t0 = w.now()
     pid = ta.send(t0, "buoy", data, 36000, 5)
