@@ -16,16 +16,16 @@ from acomm_cpython import boardfiles, cli, flash
 
 ROOT = boardfiles.repo_root()
 BOARDS = os.path.join(ROOT, "boards")
-from acomm_mp.modems import MODEMS  # noqa: E402
+from acomm.drivers.registry import names as modem_names  # noqa: E402
 
 # mpy header byte 2 is (arch << 2) | 3 for a module with native code
 _ARCH_CODE = {"x64": 2, "armv6m": 4, "xtensawin": 10}
-_ALL_DRIVERS = set(m for m, _ in MODEMS.values())
+_ALL_DRIVERS = set("acomm.drivers." + m for m in modem_names())
 
 
 def _board_drivers(board):
     cfg = boardfiles.load_config(os.path.join(BOARDS, board))
-    return set(MODEMS[lk["modem"]][0] for lk in cfg["links"])
+    return set("acomm.drivers." + lk["modem"] for lk in cfg["links"])
 
 
 def _dry_run(capsys, *args):
@@ -124,10 +124,10 @@ def test_x64_mpy_imports_on_the_unix_port(tmp_path, board):
             "    __import__(m)\n"
             "import sys\n"
             "assert sys.modules['acomm_mp.assemble'].__file__.endswith('.mpy')\n"
-            "from acomm_mp.modems import driver_class\n"
+            "from acomm.drivers.registry import driver_class\n"
             "for modem in %r:\n"
             "    driver_class(modem)\n"
-            "print('IMPORTED')\n") % (drivers, sorted(set(m for m in MODEMS if MODEMS[m][0] in drivers)))
+            "print('IMPORTED')\n") % (drivers, sorted(set(d.rpartition(".")[2] for d in drivers)))
     env = dict(os.environ, MICROPYPATH=str(dev / "lib") + ":.frozen")
     r = subprocess.run([mp, "-c", code], cwd=str(tmp_path), env=env, capture_output=True, text=True, timeout=30)
     assert r.returncode == 0 and "IMPORTED" in r.stdout, r.stdout + r.stderr

@@ -163,7 +163,7 @@ def main(path, store_path, rom=None, info=False):
     # allocated then is mostly bytecode, which a ROMFS partition or firmware
     # with the modules frozen in (ports/micropython/manifest.py) keeps in
     # flash instead
-    from acomm_mp.modems import driver_class
+    from acomm.drivers.registry import driver_class
 
     for lk in cfg["links"]:
         driver_class(lk["modem"])

@@ -22,7 +22,6 @@ from concurrent.futures import ThreadPoolExecutor
 
 from acomm_mp.boardconfig import ARCHES as MPY_ARCHES
 from acomm_mp.boardconfig import ConfigError, check
-from acomm_mp.modems import MODEMS
 
 PACKAGES = ("acomm", "acomm_mp")
 
@@ -179,7 +178,7 @@ def closure(entry_files, extra_modules=(), root=None):
 def modules(board_dir, cfg=None, root=None):
     """{module name: source path} the board needs: main.py's closure plus its modems' drivers."""
     cfg = cfg or load_config(board_dir)
-    drivers = sorted(set(MODEMS[lk["modem"]][0] for lk in cfg["links"]))
+    drivers = sorted(set("acomm.drivers." + lk["modem"] for lk in cfg["links"]))
     return closure([os.path.join(board_dir, "main.py")], drivers, root)
 
 

@@ -1,11 +1,9 @@
 # The real modems a CPython node can drive, and how `--modem` names them.
 #
-# One table of the core's sans-IO drivers (never the simulator's), used by
-# `acomm node`, `acomm bridge imc` and the quickstart's Python API. The
-# modems a board can have come from the boards' own table
-# (acomm_mp.modems.MODEMS, which `acomm run` builds with), so a topside
-# node and a board drive a modem with the same class; this table adds what
-# a computer needs besides (default baud, medium) and the transparent pipe.
+# The modems come from the one registry of the core's sans-IO drivers
+# (acomm.drivers.registry, never the simulator's), which the boards build
+# with too, so a topside node and a board drive a modem with the same class.
+# Used by `acomm node`, `acomm run`, `acomm bridge imc` and the quickstart.
 #
 #   KIND:DEVICE[:BAUD]         a serial port: seatrac:/dev/ttyUSB0,
 #                              iridium:/dev/ttyUSB1:19200
@@ -18,20 +16,11 @@
 # busy or silent (ModemError, at run time).
 
 from acomm.errors import AcommError
-from acomm_mp.modems import MODEMS as BOARD_MODEMS
+from acomm.drivers.registry import MODEMS
 
 # kind -> (driver module, class, default baud, medium, whether the driver
 # takes the modem's address as its first argument)
-DRIVERS = {
-    "seatrac": BOARD_MODEMS["seatrac"] + (115200, "acoustic", True),
-    "evologics": BOARD_MODEMS["evologics"] + (19200, "acoustic", True),
-    "micromodem": BOARD_MODEMS["micromodem"] + (19200, "acoustic", True),
-    "benthos": BOARD_MODEMS["benthos"] + (9600, "acoustic", True),
-    "iridium": BOARD_MODEMS["iridium"] + (19200, "satellite", True),
-    "sms": BOARD_MODEMS["sms"] + (115200, "gsm", True),
-    # no address, no start-up: SLIP frames on a serial cable or radio
-    "transparent": ("acomm.drivers.transparent", "TransparentDriver", 9600, "radio", False),
-}
+DRIVERS = dict((m[0], ("acomm.drivers." + m[0],) + m[1:]) for m in MODEMS)
 # the IMC bridge called the SMS modem "gsm" before this table existed
 ALIASES = {"gsm": "sms"}
 

@@ -16,12 +16,12 @@
 import gc
 
 from acomm.compat import ticks_add, ticks_diff
+from acomm.drivers.registry import driver_class, modem
 from acomm.node import Node
 from acomm.transport.packetstore import MemoryStore
 from acomm.transport import Transport
 
 from .boardconfig import ConfigError
-from .modems import driver_class
 
 
 class Board:
@@ -91,7 +91,8 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         node.set_auth(Auth(a["key"], a["tag_len"], path, a["reserve"]), commands())
     for i, lk in enumerate(cfg["links"]):
         try:
-            drv = driver_class(lk["modem"])(lk["address"], **lk["options"])
+            cls = driver_class(lk["modem"])
+            drv = cls(lk["address"], **lk["options"]) if modem(lk["modem"])[4] else cls(**lk["options"])
         except TypeError as e:
             raise ConfigError("board config: links[%d].options: %s" % (i, e))
         opts = dict(lk["link"])

@@ -17,7 +17,7 @@
 #   max_packet    the transport's largest packet, bytes
 #   watchdog_ms   machine.WDT timeout, 0 for none
 #   step_ms       main loop period; gc_ms: garbage collection period
-#   links         one dict per modem: name, modem (acomm_mp.modems), uart,
+#   links         one dict per modem: name, modem (acomm.drivers.registry), uart,
 #                 baud, tx and rx pins (None: the board's default), address
 #                 (default node_id), medium, link (Link options), options
 #                 (driver options)
@@ -26,7 +26,7 @@
 
 from acomm.errors import AcommError
 
-from .modems import MODEMS
+from acomm.drivers.registry import names as modem_names
 
 # the -march values mpy-cross (1.23 and later) knows
 ARCHES = ("x64", "x86", "armv6", "armv6m", "armv7m", "armv7em", "armv7emsp", "armv7emdp", "xtensa", "xtensawin",
@@ -88,8 +88,8 @@ def _link(i, lk, node_id, names):
         _fail(f + ".name", "a name no other link has", name)
     names.append(name)
     modem = lk.get("modem")
-    if modem not in MODEMS:
-        _fail(f + ".modem", "one of " + ", ".join(sorted(MODEMS)), modem)
+    if modem not in modem_names():
+        _fail(f + ".modem", "one of " + ", ".join(modem_names()), modem)
     out["modem"] = modem
     out["uart"] = _int(lk, "uart", 0, 9, f + ".uart")
     out["baud"] = _int(lk, "baud", 300, 4000000, f + ".baud")

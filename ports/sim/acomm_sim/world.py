@@ -34,6 +34,7 @@ from acomm_sim.clock import ManualClock
 from acomm.compat import ticks_add, ticks_diff
 from acomm_sim.fakeuart import uart_pair
 from acomm.drivers.mac import MacDriver
+from acomm.drivers.registry import driver_class
 from acomm.node import Node
 
 from .channel import Channel
@@ -68,26 +69,30 @@ def _load(mod, cls):
     return getattr(__import__(mod, None, None, [cls]), cls)
 
 
-def _driver(mod, cls):
-    return lambda addr, opts: _load(mod, cls)(addr, **opts)
-
-
 def _emulator(mod, cls):
     return lambda ch, addr, now, opts: _load(mod, cls)(ch, addr, now=now, **opts)
 
 
-# modem name -> (driver factory(address, opts), emulator factory(channel, address, now, opts))
+def _driver(name):
+    # the core's driver of that name (acomm.drivers.registry), as a board has it
+    return lambda addr, opts: driver_class(name)(addr, **opts)
+
+
+# modem name -> (driver factory(address, opts), emulator factory(channel,
+# address, now, opts)). The drivers are the registry's (acomm.drivers.registry);
+# bpsk and fhss are packet modems on its transparent driver.
 MODEMS = {
-    "seatrac": (_driver("acomm.drivers.seatrac", "SeatracDriver"), _emulator("acomm_sim.seatrac", "SeatracEmulator")),
+    "seatrac": (_driver("seatrac"), _emulator("acomm_sim.seatrac", "SeatracEmulator")),
     "bpsk": (_packet_driver("bpsk"), _packet_emu("bpsk")),
     "fhss": (_packet_driver("fhss"), _packet_emu("fhss")),
-    "evologics": (_driver("acomm.drivers.evologics", "EvologicsDriver"), _emulator("acomm_sim.evologics", "EvologicsEmulator")),
-    "micromodem": (_driver("acomm.drivers.micromodem", "MicroModemDriver"), _emulator("acomm_sim.micromodem", "MicroModemEmulator")),
-    "benthos": (_driver("acomm.drivers.benthos", "BenthosDriver"), _emulator("acomm_sim.benthos", "BenthosEmulator")),
+    "evologics": (_driver("evologics"), _emulator("acomm_sim.evologics", "EvologicsEmulator")),
+    "micromodem": (_driver("micromodem"), _emulator("acomm_sim.micromodem", "MicroModemEmulator")),
+    "benthos": (_driver("benthos"), _emulator("acomm_sim.benthos", "BenthosEmulator")),
     # surface links: the emulators share a gateway / SMS centre kept on the channel
-    "iridium": (_driver("acomm.drivers.iridium", "IridiumDriver"), _emulator("acomm_sim.iridium", "IridiumEmulator")),
-    "gsm": (lambda addr, opts: _load("acomm_sim.gsm", "sms_driver")(addr, opts), _emulator("acomm_sim.gsm", "GsmEmulator")),
+    "iridium": (_driver("iridium"), _emulator("acomm_sim.iridium", "IridiumEmulator")),
+    "sms": (lambda addr, opts: _load("acomm_sim.gsm", "sms_driver")(addr, opts), _emulator("acomm_sim.gsm", "GsmEmulator")),
 }
+MODEMS["gsm"] = MODEMS["sms"]  # the name the simulator used before the registry
 
 
 def _modem_in(now, emu, dev):
