@@ -35,7 +35,9 @@
 # ("no endpoint for node N") and the link reports the request failed.
 #
 # announce_ms > 0 (with node_id set): when no broadcast has left for that
-# long, the driver sends an acomm ADVERT itself. The Link advertises only
+# long, the driver sends an acomm ADVERT itself. Its payload is the link
+# layer's (acomm.link.discovery.encode_advert): the Link hands its encoder
+# to the driver (advert_encoder), as a driver sits below the link layer. The Link advertises only
 # after silence; a node busy talking unicast to one peer would otherwise
 # stay unknown to the rest of the LAN. A new TCP connection is announced at
 # once, so the far end can route to us before we have anything to say.
@@ -43,7 +45,6 @@
 from .. import frame as fr
 from .caps import CAP_BROADCAST, Capabilities
 from ..compat import const, ticks_diff
-from ..link.discovery import encode_advert
 from ..errors import DecodeError, EncodeError
 from ..events import EV_DRIVER_DOWN, EV_DRIVER_UP, EV_RX, EV_TX_DONE, EV_TX_FAILED
 from .base import SansIO
@@ -67,6 +68,7 @@ class DatagramDriver(SansIO):
         default=None,
         tx_timeout_ms=2000,
         model="udp",
+        advert_encoder=None,
     ):
         SansIO.__init__(self)
         if not fr.RAW_OVERHEAD_WIDE < mtu <= 65535:
@@ -76,6 +78,8 @@ class DatagramDriver(SansIO):
         self.learn = learn
         self.capacity = capacity
         self.announce_ms = announce_ms
+        # f(node_id, period_ms) -> an ADVERT's payload; the Link sets it
+        self.advert_encoder = advert_encoder
         self.streams = streams
         self.default = default
         self.tx_timeout_ms = tx_timeout_ms
@@ -290,7 +294,7 @@ class DatagramDriver(SansIO):
             self._inflight = None
             self.stats["tx_timeouts"] += 1
             self._events.append((EV_TX_FAILED, fl[0], "the port did not send the frame"))
-        if self.node_id is None:
+        if self.node_id is None or self.advert_encoder is None:
             return
         if self._last_bcast is None:
             # the clock starts now: the link adverts at once by itself
@@ -308,7 +312,7 @@ class DatagramDriver(SansIO):
             self.stats["announce_dropped"] += 1
             return
         period = self.announce_ms if self.announce_ms > 0 else 60000
-        data = fr.encode_raw(fr.Frame(fr.ADVERT, self.node_id, fr.BROADCAST, 0, encode_advert(self.node_id, period)))
+        data = fr.encode_raw(fr.Frame(fr.ADVERT, self.node_id, fr.BROADCAST, 0, self.advert_encoder(self.node_id, period)))
         for ep in eps:
             self._queue.append((None, ep, data))
         self.stats["announcements"] += 1

@@ -110,6 +110,10 @@ class Link:
         # the transport's medium choice matches it as well as the name
         self.medium = medium or name
         self.driver = driver
+        if getattr(driver, "advert_encoder", 0) is None:
+            # a driver that announces the node itself (acomm.drivers.datagram)
+            # sends this layer's ADVERT payload
+            driver.advert_encoder = encode_advert
         self.node_id = node_id
         self.names = names
         self.listener = listener

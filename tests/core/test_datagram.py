@@ -2,7 +2,7 @@
 # routing by node id, learning senders, refusing garbage and impostors,
 # announcements, TCP-style connections, and two Nodes over a fake network.
 from acomm import frame as fr
-from acomm.link.discovery import decode_advert
+from acomm.link.discovery import decode_advert, encode_advert
 from acomm.drivers.datagram import DatagramDriver
 from acomm.errors import EncodeError
 from acomm.events import (
@@ -156,7 +156,7 @@ def test_send_refuses_what_is_not_a_raw_frame():
 
 
 def test_announcements_top_up_adverts():
-    d = DatagramDriver(node_id=4, broadcast=[GROUP], announce_ms=1000)
+    d = DatagramDriver(node_id=4, broadcast=[GROUP], announce_ms=1000, advert_encoder=encode_advert)
     d.poll(0)
     assert d.take_datagrams() == []  # at start the link's own advert goes
     d.poll(1000)
@@ -176,13 +176,13 @@ def test_announcements_top_up_adverts():
     d.poll(2900)
     assert len(d.take_datagrams()) == 1 and d.stats["announcements"] == 2
     # without a node id the driver cannot speak for the node
-    d = DatagramDriver(broadcast=[GROUP], announce_ms=1000)
+    d = DatagramDriver(broadcast=[GROUP], announce_ms=1000, advert_encoder=encode_advert)
     d.poll(5000)
     assert d.take_datagrams() == []
 
 
 def test_connections_gate_sending_and_fail_what_they_take_down():
-    d = DatagramDriver(node_id=1, streams=True)
+    d = DatagramDriver(node_id=1, streams=True, advert_encoder=encode_advert)
     assert not d.ready(0)
     d.connection_up(0, A)
     d.connection_up(0, B)
