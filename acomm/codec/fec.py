@@ -4,7 +4,7 @@
 # retransmission (seconds of air time) unless the receiver can repair it, so
 # the store-and-forward transport may append RS parity to what it sends.
 #
-# Code parameters (fixed by issue 7; the defaults of common RS libraries such
+# Code parameters (the defaults of common RS libraries such
 # as the `reedsolo` package, so acomm's codewords interoperate with them):
 # field polynomial 0x11d, generator alpha = 2, first consecutive root 0
 # (the generator polynomial is (x - 1)(x - 2)...(x - alpha^(nsym-1))),

@@ -75,6 +75,7 @@ def write_count(w, n, fixed, most, prefix_bits, unit):
 
 
 class Field:
+    """The field interface: name, min_bits, max_bits, limit_bits; encode(w, v) and decode(r) on acomm.codec.bits."""
     saturate = False
 
 
@@ -98,6 +99,8 @@ class Scalar(Field):
 
 
 class UInt(Scalar):
+    """An integer lo..hi in the fewest bits; EncodeError outside it, unless saturate clamps."""
+
     def __init__(self, name, lo, hi, saturate=False):
         if hi < lo:
             raise ValueError("%s: hi < lo" % name)
@@ -121,6 +124,7 @@ class UInt(Scalar):
 
 
 class Fixed(Scalar):
+    """A number lo..hi at resolution res (a float decodes to the nearest step); EncodeError outside, unless saturate."""
     # A quantized real: code = round((v - lo) / res), half up, so the
     # decoded lo + code*res is within res/2 of v. steps = round((hi-lo)/res)
     # makes hi reachable even when (hi-lo)/res is off an integer by float
@@ -165,6 +169,8 @@ class Fixed(Scalar):
 
 
 class Enum(Scalar):
+    """One of the labels (strings), sent as its index."""
+
     def __init__(self, name, labels):
         if not labels:
             raise ValueError("%s: no labels" % name)
@@ -188,6 +194,8 @@ class Enum(Scalar):
 
 
 class Bool(Scalar):
+    """True or False in one bit."""
+
     def __init__(self, name):
         self.name = name
         self._sizes(2)
@@ -204,6 +212,7 @@ class Bool(Scalar):
 
 
 class Wide(Scalar):
+    """Another scalar field written in a fixed, larger number of bits (a layout fixed by an outside table)."""
     # A scalar field written in more bits than it needs, for layouts whose
     # width is fixed by an outside table (CADDY legacy positions). Codes
     # past the inner field's range are still rejected on decode.
@@ -222,6 +231,8 @@ class Wide(Scalar):
 
 
 class Bytes(Field):
+    """Up to max_len bytes (exactly max_len when fixed), with a length prefix when not fixed."""
+
     def __init__(self, name, max_len, fixed=False):
         self.name = name
         self.max_len = max_len
@@ -247,6 +258,7 @@ class Bytes(Field):
 
 
 class Optional(Field):
+    """A presence bit, then the field when the value is not None."""
     # A presence bit, then the field when present. None means absent.
     def __init__(self, field):
         self.field = field
@@ -271,6 +283,7 @@ class Optional(Field):
 
 
 class Array(Field):
+    """Up to max_count values of one field (exactly max_count when fixed), with a count prefix when not fixed."""
     # `fixed` arrays always hold max_count items; others get a count prefix.
     def __init__(self, field, max_count, fixed=False):
         self.field = field
@@ -314,6 +327,7 @@ class Array(Field):
 
 
 class Nested(Field):
+    """A whole message's body as one field (its values dict)."""
     # The body of another Message (no id), as a dict.
     def __init__(self, name, message):
         self.name = name

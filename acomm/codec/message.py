@@ -27,7 +27,10 @@ def _top(e, msg_name):
 
 
 class Message:
+    """A message: a name, a small id and its fields in order; encodes values dicts to bits and back."""
+
     def __init__(self, name, msg_id, fields):
+        """fields: acomm.codec.fields instances with distinct names; ValueError for a duplicate."""
         self.name = name
         self.msg_id = self.id = msg_id  # id: the short name catalogs use
         self.fields = tuple(fields)
@@ -90,13 +93,13 @@ class Message:
             raise _top(e, self.name) from None
 
     def encode(self, values):
-        # The body alone, zero-padded to whole bytes.
+        """values dict -> the body alone, zero-padded to whole bytes; EncodeError for a value out of its field."""
         w = BitWriter(self._buf)
         self.encode_into(w, values)
         return w.getvalue()
 
     def decode(self, buf):
-        # The inverse of encode: only zero padding may follow the body.
+        """The inverse of encode -> values dict; DecodeError for anything but zero padding after the body."""
         r = BitReader(buf)
         out = self.decode_from(r)
         rem = r.remaining
@@ -114,7 +117,10 @@ class Message:
 
 
 class Catalog:
+    """Messages with ids of id_bits bits; packs several (message, values) into one frame and back."""
+
     def __init__(self, name, id_bits, messages):
+        """ValueError when an id does not fit id_bits or two messages share one."""
         self.name = name
         self.id_bits = id_bits
         self.messages = tuple(messages)

@@ -222,13 +222,14 @@ class Link:
     # -- frame transmission request ----------------------------------------------
     def request(self, now, req_id, dst, data, lifespan_s, priority=10, ack=False, retries=None, ftype=fr.DATA,
                 seq=None):
-        # Returns True when accepted (status `queued` follows), False when
-        # refused (status `failed` with the reason was already emitted).
-        # retries: tries after the first when unacknowledged (None: the
-        # link's max_retries; 0 for a schedule that must not repeat itself).
-        # ftype: DATA for applications, SEGMENT for the transport, which
-        # also gives seq: the frame header's sequence field carries the
-        # first bits of its segments (acomm.transport.segment).
+        """Queues one frame of data (bytes) for dst (a node name or BROADCAST), to leave within
+        lifespan_s seconds, priority 1 (first) .. 16. -> True when accepted: `queued` follows and
+        then exactly one final status (`delivered` needs ack=True and a link or modem ack). False
+        when refused: `failed` with the reason was already emitted. Never raises for bad input.
+        retries: tries after the first when unacknowledged (None: the link's max_retries; 0 for a
+        schedule that must not repeat itself). ftype: DATA for applications, SEGMENT for the
+        transport, which also gives seq: the frame header's sequence field carries the first bits
+        of its segments (acomm.transport.segment)."""
         if not 0 <= req_id <= 0xFFFF:
             return self._refuse(req_id & 0xFFFF, "request id outside 0..65535")
         if req_id in self._active:
@@ -278,7 +279,8 @@ class Link:
 
     # -- cancellation -------------------------------------------------------------
     def cancel(self, now, req_id, reason="canceled"):
-        """-> True when the request was still open: its final status is then `canceled`."""
+        """Cancels request req_id -> True when it was still open: its one final status is then
+        `canceled` (a frame already on the air is not called back; its outcome is dropped)."""
         req = self.queue.cancel(req_id)
         if req is not None:
             self._final(req, _CANCELED, reason)
@@ -597,7 +599,9 @@ class Link:
 
     # -- ranging (seed 000's ranging request and range received) ------------------
     def range(self, now, req_id, names, lifespan_s, priority=2):
-        """Pings each node named; EV_RANGE_RECEIVED (metres, None where none answered), then a final status."""
+        """Pings each node named in turn (names: a list), within lifespan_s seconds -> True when
+        accepted. Then one EV_RANGE_RECEIVED (names, metres: None where none answered) and a final
+        status: `delivered` with at least one range, else `failed`; refusals as for request()."""
         if not self.driver.caps.has(CAP_RANGING):
             return self._refuse(req_id, "%s cannot measure range" % self.name)
         if req_id in self._active:

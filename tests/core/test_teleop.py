@@ -71,12 +71,20 @@ def test_thrust_strict_and_clamped():
 
 
 def test_random_bytes_raise_only_decode_error():
+    # any other exception fails the test; both outcomes must occur, and what
+    # decodes is messages of the catalog with their values
     rng = Prng(44)
+    decoded = refused = 0
     for _ in range(1000):
         try:
-            T.CATALOG.unpack(bytes(rng.below(256) for _ in range(rng.below(8))))
+            msgs = T.CATALOG.unpack(bytes(rng.below(256) for _ in range(rng.below(8))))
         except DecodeError:
-            pass
+            refused += 1
+            continue
+        decoded += 1
+        for m, values in msgs:
+            assert T.CATALOG.by_id(m.msg_id) is m and isinstance(values, dict)
+    assert decoded > 10 and refused > 10, (decoded, refused)
 
 
 def test_sender_event_triggered_beyond_threshold():
