@@ -13,7 +13,6 @@
 # and the node calls it before and after each poll of the link.
 
 from .compat import const, ticks_ms
-from .events import is_final
 from .link import Link
 from .link.names import NameTable
 
@@ -220,12 +219,3 @@ class Node:
             self.step()
             await asyncio.sleep(period_ms / 1000)
 
-
-def final_statuses(events):
-    # Helper for applications and tests: {req_id: status} of the final
-    # statuses among events.
-    out = {}
-    for ev in events:
-        if ev[0] == _EV_STATUS and is_final(ev[3]):
-            out[ev[2]] = ev[3]
-    return out

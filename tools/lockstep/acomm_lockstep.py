@@ -167,6 +167,7 @@ def main(path, store_path, rom=None, info=False):
 
     for lk in cfg["links"]:
         driver_class(lk["modem"])
+    driver_class = None
     import acomm.transport.store  # noqa: F401
     import acomm_mp.runloop  # noqa: F401
 
@@ -186,7 +187,11 @@ def main(path, store_path, rom=None, info=False):
     clock = [0]
     board = build(cfg, open_uart, lambda: clock[0], lambda: 1000000 + clock[0] // 1000, _store(store_path),
                   listener=lambda ev: None, say=lambda s: None)
-    cfg = None
+    cfg = build = None
+    # as acomm_mp.start does once the node is built
+    from acomm_mp import release_builder
+
+    release_builder()
     gc.collect()
     base = gc.mem_alloc()
     if info:

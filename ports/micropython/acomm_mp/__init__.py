@@ -15,3 +15,10 @@ def release(name):
     parent = sys.modules.get(pkg)
     if parent is not None and leaf in parent.__dict__:
         delattr(parent, leaf)
+
+
+def release_builder():
+    # After acomm_mp.assemble.build: the builder and the modem registry are
+    # needed once; the caller drops its reference to build() first.
+    release("acomm_mp.assemble")
+    release("acomm.drivers.registry")

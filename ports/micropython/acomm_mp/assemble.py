@@ -8,72 +8,17 @@
 # tests and the simulator (fake UARTs, a RAM store, a virtual clock):
 #   open_uart(link_cfg) -> stream     open_store(storage_cfg) -> store
 #
-# Board.tick(now) is one round of the main loop. It never lets an error out:
-# a MemoryError in the middle of a transfer, or anything a driver raises on
-# garbage, is counted, reported once per kind through say(), and the node
-# carries on at the next tick (the store still holds every packet).
+# Needed once, at boot: a board releases this module and the modem registry
+# once the node is built (acomm_mp.release_builder), and their code and
+# tables go back to the heap. The Board it returns lives in acomm_mp.runloop.
 
-import gc
-
-from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers.registry import driver_class, modem
 from acomm.node import Node
 from acomm.transport.packetstore import MemoryStore
 from acomm.transport import Transport
 
 from .boardconfig import ConfigError
-
-
-class Board:
-    def __init__(self, cfg, node, transport, station, say):
-        self.cfg = cfg
-        self.node = node
-        self.transport = transport
-        self.station = station
-        self.say = say
-        self.wdt = None
-        self._gc_due = None
-        self.stats = {"ticks": 0, "errors": 0, "oom": 0, "gc": 0}
-        self._reported = []  # exception types already reported (at most 8)
-        self.mem_peak = 0
-
-    def tick(self, now):
-        self.stats["ticks"] += 1
-        try:
-            self.node.step(now)
-            if self.station is not None:
-                self.station.poll(now)
-        except MemoryError:
-            self.stats["oom"] += 1
-            gc.collect()
-            self._report("MemoryError", "out of memory during a step; packets stay in the store, carrying on")
-        except Exception as e:  # noqa: BLE001 - the node must keep running at sea
-            self.stats["errors"] += 1
-            kind = type(e).__name__
-            self._report(kind, "error during a step: %s %s" % (kind, e))
-        if self.wdt is not None:
-            self.wdt.feed()
-        if self._gc_due is None or ticks_diff(now, self._gc_due) >= 0:
-            # between steps nothing is half-built: a safe point to collect
-            self._gc_due = ticks_add(now, self.cfg["gc_ms"])
-            self._measure()
-            gc.collect()
-            self.stats["gc"] += 1
-
-    def _measure(self):
-        alloc = getattr(gc, "mem_alloc", None)
-        if alloc is not None:
-            a = alloc()
-            if a > self.mem_peak:
-                self.mem_peak = a
-
-    def _report(self, kind, text):
-        # once per exception type, and for at most 8 types: a fault that
-        # repeats every tick must not flood the console (stats count all)
-        if kind in self._reported or len(self._reported) >= 8:
-            return
-        self._reported.append(kind)
-        self.say("acomm %s: %s" % (self.cfg["name"], text))
+from .runloop import Board
 
 
 def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None, say=print, make_report=None):

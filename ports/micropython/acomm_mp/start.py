@@ -17,8 +17,7 @@ import time
 from acomm.compat import ticks_ms
 from acomm.transport.store import Store
 
-from . import release
-from .assemble import build
+from . import release, release_builder
 from .uartstream import UartStream
 
 
@@ -75,8 +74,12 @@ def start(config, make_report=None, machine=None):
     cfg = load_config(config)
     if machine is None:
         import machine
+    from .assemble import build
+
     board = build(cfg, lambda lk: open_uart(machine, lk), ticks_ms, lambda: int(time.time()), open_store,
                   make_report=make_report)
+    build = None
+    release_builder()  # needed once: the builder's code and the modem table go back to the heap
     if cfg["watchdog_ms"] and hasattr(machine, "WDT"):
         board.wdt = machine.WDT(timeout=cfg["watchdog_ms"])
     from .runloop import run_blocking
