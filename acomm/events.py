@@ -1,6 +1,10 @@
-# The vocabulary shared by drivers, links and the node: request statuses and
-# event codes. Events are plain tuples whose first item is one of the EV_*
-# codes, so they cost one small allocation and run on both runtimes.
+# The vocabulary shared by drivers, links and the node: request statuses,
+# event codes and the names of the events' fields. Events are plain tuples
+# whose first item is one of the EV_* codes, so they cost one small
+# allocation and run on both runtimes; read their fields by name:
+#   if ev[0] == EV_STATUS and is_final(ev[STATUS]): done[ev[REQ_ID]] = ev[STATUS]
+# (modules on a board's path keep private const() copies of what they read:
+# inlined, they cost no RAM).
 
 from .compat import const
 
@@ -82,3 +86,44 @@ EV_PACKET = const(27)
 # tag holds a command (acomm.link.guard): (EV_REFUSED, link or None,
 # src_name, reason); the command is not passed on
 EV_REFUSED = const(28)
+
+# The fields of the events, by position (ev[0] is always the code).
+# Driver -> link:
+HANDLE = const(1)  # EV_TX_DONE, EV_DELIVERED, EV_TX_FAILED, EV_RANGE: the send's or ping's handle
+RX_SRC = const(1)  # EV_RX: the sender's interface address (None without addressing)
+RX_DST = const(2)  # EV_RX: the destination address
+RX_DATA = const(3)  # EV_RX: the bytes
+FAIL_REASON = const(2)  # EV_TX_FAILED
+RANGE_ADDR = const(2)  # EV_RANGE: who answered (None when the ping failed)
+RANGE_METRES = const(3)  # EV_RANGE
+RANGE_EXTRA = const(4)  # EV_RANGE, when present: a dict of what else the fix says
+DOWN_REASON = const(1)  # EV_DRIVER_DOWN
+# Link -> node and application (LINK: the Link, in every one of them):
+LINK = const(1)
+REQ_ID = const(2)  # EV_STATUS, EV_RANGE_RECEIVED: the request's id
+STATUS = const(3)  # EV_STATUS: QUEUED .. FAILED
+REASON = const(4)  # EV_STATUS: text, "" when there is nothing to say
+SRC = const(2)  # EV_RECEIVED: the sender's name
+DST = const(3)  # EV_RECEIVED: the destination's name (BROADCAST for all)
+DATA = const(4)  # EV_RECEIVED: the bytes
+AUTHED = const(5)  # EV_RECEIVED with a key: whether the tag verified
+NAME = const(2)  # EV_AVAILABILITY: whose
+STATE = const(3)  # EV_AVAILABILITY: UNKNOWN, AVAILABLE or UNAVAILABLE
+CAPS = const(2)  # EV_CAPS: the link's acomm.drivers.caps.Capabilities
+NAMES = const(3)  # EV_RANGE_RECEIVED: the names asked, in order
+METRES = const(4)  # EV_RANGE_RECEIVED: one range per name, None where none answered
+SEG_SRC = const(2)  # EV_SEGMENT: the neighbour's id
+SEG_DST = const(3)  # EV_SEGMENT: the destination id, or None
+SEG_HEAD = const(4)  # EV_SEGMENT: the frame header's sequence field
+SEG_PAYLOAD = const(5)  # EV_SEGMENT
+SEG_AUTHED = const(6)  # EV_SEGMENT
+# Transport -> application:
+PID = const(1)  # EV_PACKET_STATUS: the packet's id
+PACKET_STATUS = const(2)  # EV_PACKET_STATUS: QUEUED .. FAILED
+PACKET_REASON = const(3)  # EV_PACKET_STATUS
+PACKET_SRC = const(1)  # EV_PACKET: the origin's name
+PACKET_DST = const(2)  # EV_PACKET: the final destination's name
+PACKET_DATA = const(3)  # EV_PACKET: the bytes
+PACKET_AUTHED = const(4)  # EV_PACKET with a key: every fragment verified
+REFUSED_SRC = const(2)  # EV_REFUSED: who sent it (LINK is None for a packet)
+REFUSED_REASON = const(3)  # EV_REFUSED

@@ -20,6 +20,15 @@ from .link.names import NameTable
 # RAM (imported, each took a slot in this module's dict)
 _EV_SEGMENT = const(25)
 _EV_STATUS = const(20)
+_LINK = const(1)
+_REQ_ID = const(2)
+_STATUS = const(3)
+_REASON = const(4)
+_SEG_SRC = const(2)
+_SEG_DST = const(3)
+_SEG_HEAD = const(4)
+_SEG_PAYLOAD = const(5)
+_SEG_AUTHED = const(6)
 
 _READ_CHUNK = const(256)
 _EVENT_BACKLOG = const(64)
@@ -118,9 +127,9 @@ class Node:
         if t is not None:
             code = ev[0]
             if code == _EV_SEGMENT:
-                t.on_segment(self._now, ev[1], ev[2], ev[3], ev[4], ev[5], ev[6])
+                t.on_segment(self._now, ev[_LINK], ev[_SEG_SRC], ev[_SEG_DST], ev[_SEG_HEAD], ev[_SEG_PAYLOAD], ev[_SEG_AUTHED])
                 return
-            if code == _EV_STATUS and t.on_link_status(self._now, ev[2], ev[3], ev[4]):
+            if code == _EV_STATUS and t.on_link_status(self._now, ev[_REQ_ID], ev[_STATUS], ev[_REASON]):
                 return
         self.emit(ev)
 

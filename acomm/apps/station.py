@@ -18,7 +18,11 @@
 from ..catalog import caddy
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError
-from ..events import EV_PACKET
+
+# acomm.events' code and fields, as private constants (inlined: no RAM)
+_EV_PACKET = const(27)
+_PACKET_SRC = const(1)
+_PACKET_DATA = const(3)
 
 _INBOX = const(16)
 _ALARM_PRIORITY = const(1)
@@ -83,9 +87,9 @@ class Station:
 
     # -- receiving --------------------------------------------------------------
     def _on_event(self, ev):
-        if ev[0] == EV_PACKET:
+        if ev[0] == _EV_PACKET:
             self.stats["received"] += 1
-            self._keep(ev[1], ev[3])
+            self._keep(ev[_PACKET_SRC], ev[_PACKET_DATA])
 
     def _keep(self, src, data):
         try:

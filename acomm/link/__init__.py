@@ -41,6 +41,12 @@ _EV_DELIVERED = const(3)
 _EV_DRIVER_DOWN = const(7)
 _EV_DRIVER_UP = const(6)
 _EV_RANGE = const(5)
+_FAIL_REASON = const(2)
+_HANDLE = const(1)
+_RANGE_METRES = const(3)
+_RX_DATA = const(3)
+_RX_DST = const(2)
+_RX_SRC = const(1)
 _EV_RANGE_RECEIVED = const(24)
 _EV_RECEIVED = const(21)
 _EV_REFUSED = const(28)
@@ -62,6 +68,10 @@ BROADCAST = "*"  # destination name meaning every node on the link
 _MAX_PENDING_ACKS = const(4)
 _IDLE = const(0)  # the transmission slot's states
 _SENDING = const(1)  # a frame or ping is on the air
+_K_DATA = const(0)  # what the slot holds: a request's frame,
+_K_ADVERT = const(1)  # an advert,
+_K_ACK = const(2)  # a link ACK,
+_K_PING = const(3)  # or a ranging job's ping
 
 
 class _Inflight:
@@ -81,7 +91,7 @@ class _Inflight:
         self.seq = 0
         self.dst_id = None
         self.canceled = False
-        self.kind = 0  # 0 data, 1 advert, 2 link ack, 3 ping
+        self.kind = _K_DATA  # what is in the slot: _K_DATA, _K_ADVERT, _K_ACK or _K_PING
 
 
 class Link:
@@ -325,7 +335,7 @@ class Link:
                 self._retry_or_fail(req, now, "no acknowledgement")
         for req in self.queue.expire(now):
             self._final(req, _EXPIRED, "lifespan ended in the queue")
-        if fl.state == _IDLE and fl.kind == 3 and fl.req is not None:
+        if fl.state == _IDLE and fl.kind == _K_PING and fl.req is not None:
             # a ranging job between two pings
             if ticks_diff(now, fl.req.deadline) >= 0:
                 self._finish_range(fl.req)
@@ -400,7 +410,7 @@ class Link:
         d = self.driver
         if self._pending_acks:
             dst_id, seq = self._pending_acks.pop(0)
-            if self._send_control(now, 2, fr.ACK, dst_id, seq, b""):
+            if self._send_control(now, _K_ACK, fr.ACK, dst_id, seq, b""):
                 self.stats["acks_sent"] += 1
             return
         if self._acks.full():
@@ -415,7 +425,7 @@ class Link:
                 self._last_tx = now
                 self.discovery.advert_sent()
                 advert = encode_advert(self.node_id, self.discovery.period_ms)
-                if self._send_control(now, 1, fr.ADVERT, None, self._next_seq(), advert):
+                if self._send_control(now, _K_ADVERT, fr.ADVERT, None, self._next_seq(), advert):
                     self.stats["adverts_sent"] += 1
             return
         fl.req = req
@@ -440,7 +450,7 @@ class Link:
             fl.clear()
             self._final(req, _FAILED, "driver refused the frame: %s" % e)
             return
-        fl.kind = 0
+        fl.kind = _K_DATA
         fl.seq = seq
         fl.dst_id = req.dst
         fl.state = _SENDING
@@ -453,16 +463,16 @@ class Link:
         for ev in self.driver.take_events():
             code = ev[0]
             if code == _EV_RX:
-                self._on_rx(now, ev[1], ev[2], ev[3])
+                self._on_rx(now, ev[_RX_SRC], ev[_RX_DST], ev[_RX_DATA])
             elif code == _EV_TX_DONE:
-                self._on_tx_done(now, ev[1])
+                self._on_tx_done(now, ev[_HANDLE])
             elif code == _EV_DELIVERED:
-                self._on_delivered(now, ev[1])
+                self._on_delivered(now, ev[_HANDLE])
             elif code == _EV_TX_FAILED:
-                self._on_tx_failed(now, ev[1], ev[2])
+                self._on_tx_failed(now, ev[_HANDLE], ev[_FAIL_REASON])
             elif code == _EV_RANGE:
-                if self._fl.kind == 3 and ev[1] == self._fl.handle:
-                    self._range_result(now, ev[3])
+                if self._fl.kind == _K_PING and ev[_HANDLE] == self._fl.handle:
+                    self._range_result(now, ev[_RANGE_METRES])
             elif code == _EV_DRIVER_UP or code == _EV_DRIVER_DOWN:
                 self._check_caps_changed()
             elif code == _EV_REPLIED:
@@ -472,9 +482,9 @@ class Link:
 
     def _on_tx_done(self, now, handle):
         fl = self._fl
-        if fl.state != _SENDING or handle != fl.handle or fl.kind == 3:
+        if fl.state != _SENDING or handle != fl.handle or fl.kind == _K_PING:
             return
-        if fl.kind != 0:  # advert or link ack: nothing to report
+        if fl.kind != _K_DATA:  # advert or link ack: nothing to report
             fl.clear()
             return
         req = fl.req
@@ -491,7 +501,7 @@ class Link:
 
     def _on_delivered(self, now, handle):
         fl = self._fl
-        if fl.state == _SENDING and fl.kind == 0 and handle == fl.handle:
+        if fl.state == _SENDING and fl.kind == _K_DATA and handle == fl.handle:
             if not fl.canceled:
                 # confirmed before the end of transmission was reported
                 fl.canceled = True
@@ -508,14 +518,14 @@ class Link:
             if req is not None:
                 self._retry_or_fail(req, now, reason)
             return
-        if fl.kind == 3:
+        if fl.kind == _K_PING:
             self._range_result(now, None)
             return
         req = fl.req
         kind = fl.kind
         canceled = fl.canceled
         fl.clear()
-        if kind == 0 and req is not None and not canceled:
+        if kind == _K_DATA and req is not None and not canceled:
             self._retry_or_fail(req, now, reason)
 
     def _on_rx(self, now, src_addr, dst_addr, data):
@@ -564,7 +574,7 @@ class Link:
                 return
         if f.ftype == fr.ACK:
             fl = self._fl
-            if fl.state == _SENDING and fl.kind == 0 and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
+            if fl.state == _SENDING and fl.kind == _K_DATA and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
                 # the ack beat our own end-of-transmission estimate: the
                 # request is done; the slot frees at EV_TX_DONE
                 fl.canceled = True
@@ -630,7 +640,7 @@ class Link:
         req = fl.req
         ids, _, idx = req.meta[1]
         nid = ids[idx[0]]
-        fl.kind = 3
+        fl.kind = _K_PING
         fl.state = _SENDING
         if idx[0] == 0:
             self._status(req.req_id, _TRANSMITTING)
@@ -651,7 +661,7 @@ class Link:
             fl.clear()
             return
         if idx[0] < len(ids) and ticks_diff(now, req.deadline) < 0:
-            # the job stays in the slot (kind 3, state idle); poll() sends the
+            # the job stays in the slot (_K_PING, state idle); poll() sends the
             # next ping when the driver is ready
             fl.state = _IDLE
             if self.driver.ready(now):

@@ -65,6 +65,7 @@ _TRANSMITTED = const(4)
 _EV_PACKET = const(27)
 _EV_REFUSED = const(28)
 _SACK_PRIORITY = const(2)
+_SACK_LIFESPAN_S = const(60)  # a SACK older than this is stale: the sender polls again
 _RX_TIMEOUT_MS = const(600000)
 _MAX_RX = const(8)
 _PIPELINE = const(3)  # fragments of one transfer in a link queue at a time
@@ -378,7 +379,7 @@ class Transport:
         life = p.expiry - self.wall()
         if life < 1:
             life = 1
-        if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, False, None, SEGMENT, head):
+        if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, ftype=SEGMENT, seq=head):
             poll = sg.is_poll(head)
             self._reqs[rid] = (p, index, poll)
             p.inflight += 1
@@ -646,8 +647,8 @@ class Transport:
         if self._quiet and not tries:
             return
         rid = self._next_id()
-        if link.request(now, rid, self.names.name_of(src), seg[1], 60, _SACK_PRIORITY, False, None, SEGMENT,
-                        seg[0]):
+        if link.request(now, rid, self.names.name_of(src), seg[1], _SACK_LIFESPAN_S, _SACK_PRIORITY, ftype=SEGMENT,
+                        seq=seg[0]):
             self._sacks[rid] = (link, src, seg, tries)
 
     def _sack_status(self, now, rid, status):

@@ -11,6 +11,7 @@
 import json
 import time
 
+import acomm.events as E
 from acomm.events import (AVAIL_NAMES, EV_AVAILABILITY, EV_PACKET, EV_PACKET_STATUS, EV_RANGE_RECEIVED, EV_RECEIVED,
                           EV_REFUSED, EV_STATUS, STATUS_NAMES, is_final)
 
@@ -45,33 +46,35 @@ def as_dict(ev):
     """The dict of a node event, or None for events a console does not show (caps)."""
     code = ev[0]
     if code == EV_RECEIVED:
-        d = {"event": "received", "link": ev[1].name, "src": ev[2], "dst": ev[3]}
-        d.update(payload_fields(ev[4]))
-        if len(ev) > 5:
-            d["authenticated"] = bool(ev[5])  # with a key: whether its frame's tag verified
+        d = {"event": "received", "link": ev[E.LINK].name, "src": ev[E.SRC], "dst": ev[E.DST]}
+        d.update(payload_fields(ev[E.DATA]))
+        if len(ev) > E.AUTHED:
+            d["authenticated"] = bool(ev[E.AUTHED])  # with a key: whether its frame's tag verified
         return d
     if code == EV_AVAILABILITY:
-        return {"event": _name(ev[3], AVAIL_NAMES), "node": ev[2], "link": ev[1].name}
+        return {"event": _name(ev[E.STATE], AVAIL_NAMES), "node": ev[E.NAME], "link": ev[E.LINK].name}
     if code == EV_STATUS:
-        return {"event": "status", "link": ev[1].name, "id": ev[2], "status": _name(ev[3], STATUS_NAMES),
-                "reason": ev[4] or "", "final": is_final(ev[3])}
+        return {"event": "status", "link": ev[E.LINK].name, "id": ev[E.REQ_ID],
+                "status": _name(ev[E.STATUS], STATUS_NAMES), "reason": ev[E.REASON] or "", "final": is_final(ev[E.STATUS])}
     if code == EV_RANGE_RECEIVED:
-        return {"event": "range", "link": ev[1].name, "id": ev[2],
-                "ranges": dict((n, None if m is None else round(m, 1)) for n, m in zip(ev[3], ev[4]))}
+        return {"event": "range", "link": ev[E.LINK].name, "id": ev[E.REQ_ID],
+                "ranges": dict((n, None if m is None else round(m, 1)) for n, m in zip(ev[E.NAMES], ev[E.METRES]))}
     if code == EV_PACKET_STATUS:
-        return {"event": "packet_status", "id": ev[1], "status": _name(ev[2], STATUS_NAMES), "reason": ev[3] or "",
-                "final": is_final(ev[2])}
+        return {"event": "packet_status", "id": ev[E.PID], "status": _name(ev[E.PACKET_STATUS], STATUS_NAMES),
+                "reason": ev[E.PACKET_REASON] or "", "final": is_final(ev[E.PACKET_STATUS])}
     if code == EV_PACKET:
-        d = {"event": "packet_received", "src": ev[1], "dst": ev[2], "bytes": len(ev[3])}
-        if len(ev) > 4:
-            d["authenticated"] = bool(ev[4])
-        caddy = caddy_messages(ev[3])
+        d = {"event": "packet_received", "src": ev[E.PACKET_SRC], "dst": ev[E.PACKET_DST],
+             "bytes": len(ev[E.PACKET_DATA])}
+        if len(ev) > E.PACKET_AUTHED:
+            d["authenticated"] = bool(ev[E.PACKET_AUTHED])
+        caddy = caddy_messages(ev[E.PACKET_DATA])
         if caddy:
             d["caddy"] = caddy
         return d
     if code == EV_REFUSED:
-        return {"event": "refused", "link": ev[1].name if ev[1] is not None else None, "src": ev[2],
-                "reason": ev[3]}
+        link = ev[E.LINK]
+        return {"event": "refused", "link": link.name if link is not None else None, "src": ev[E.REFUSED_SRC],
+                "reason": ev[E.REFUSED_REASON]}
     return None
 
 
