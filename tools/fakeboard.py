@@ -18,7 +18,8 @@
 #     "MPY: soft reboot", start a new one and put it back in the raw REPL;
 #   * Ctrl-C: the port only reacts to SIGINT (our ptys are raw, so the byte
 #     0x03 raises nothing); while it runs code we send SIGINT instead;
-#   * SIGUSR1 to fakeboard is a hard reset (power cycle, banner printed).
+#   * SIGUSR1 to fakeboard is a hard reset (power cycle, banner printed; it
+#     says 'fakeboard: reset' on its stdout when the board is back).
 # SIGTERM/SIGINT stop it: child killed, link removed.  Stdlib only.
 import argparse
 import os
@@ -192,6 +193,7 @@ class FakeBoard:
             if self.hard_reset:
                 self.hard_reset = False
                 self.to_host += self.start(raw=False)
+                print("fakeboard: reset", flush=True)  # what a test waits on
             timeout = self.interrupt() if self.intr_due else 1.0
             rl = [self.wake_r]
             if not self.to_board:

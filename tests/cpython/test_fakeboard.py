@@ -53,16 +53,19 @@ class Board:
             [sys.executable, str(FAKEBOARD), "--link", self.link, "--flash", str(self.flash),
              "--heap", heap, "--micropython", str(MICROPYTHON)],
             stdout=subprocess.PIPE, stderr=self.errlog, text=True)
+        self.wait_line("fakeboard: ready %s\n" % self.link, "fakeboard did not start: ")
+
+    def wait_line(self, want, what):
+        # the board process says when it is ready, or reset: wait for that line
         deadline = time.monotonic() + TIMEOUT_S
         while True:
             left = deadline - time.monotonic()
             if left <= 0 or self.proc.poll() is not None:
                 self.stop()
-                raise AssertionError("fakeboard did not start: " + self.stderr())
+                raise AssertionError(what + self.stderr())
             if select.select([self.proc.stdout], [], [], left)[0]:
-                line = self.proc.stdout.readline()
-                if line == "fakeboard: ready %s\n" % self.link:
-                    break
+                if self.proc.stdout.readline() == want:
+                    return
 
     def stderr(self):
         self.errlog.seek(0)
@@ -152,7 +155,7 @@ def test_mount_host_dir(board, tmp_path):
 def test_hard_reset_and_clean_stop(board):
     board.mp("exec", "B = 2")
     board.proc.send_signal(signal.SIGUSR1)  # power cycle: state gone
-    time.sleep(0.5)
+    board.wait_line("fakeboard: reset\n", "fakeboard did not come back from the reset: ")
     assert board.mp("resume", "exec", "print('B' in globals())").strip() == "False"
     kids = children(board.proc.pid)
     assert len(kids) == 1  # the interpreter
