@@ -18,7 +18,7 @@ from acomm.errors import AcommError
 from acomm.node import Node
 
 from .imcbridge import ANNOUNCE_GROUP, DATA_PORT, ImcBridge
-from .imcgateway import ImcGateway
+from acomm.apps.imcgateway import ImcGateway
 from .ipnode import hostport, keyval
 from .modems import ModemError
 

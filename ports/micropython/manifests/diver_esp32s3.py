@@ -44,7 +44,6 @@ package(
         "drivers/seatrac_wire.py",
         "drivers/slotbase.py",
         "errors.py",
-        "events.py",
         "frame/__init__.py",
         "frame/auth.py",
         "link/__init__.py",

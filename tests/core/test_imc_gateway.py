@@ -1,4 +1,4 @@
-# The IMC gateway's protocol logic (acomm_cpython.imcgateway) without
+# The IMC gateway's protocol logic (acomm.apps.imcgateway) without
 # sockets: two simulated SeaTrac nodes, a gateway on each, IMC packets fed
 # in as datagrams from a made-up endpoint, and what comes out decoded.
 import time
@@ -6,7 +6,7 @@ import time
 from acomm import imc
 from acomm.events import EV_RECEIVED
 from acomm.imc import enums as E
-from acomm_cpython.imcgateway import ImcGateway
+from acomm.apps.imcgateway import ImcGateway
 from acomm_sim.world import World
 
 TOOL = ("127.0.0.1", 6001)  # a Neptus, say

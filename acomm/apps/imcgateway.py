@@ -21,13 +21,13 @@
 
 import time
 
-from acomm import imc
-from acomm.compat import ticks_add, ticks_diff
-from acomm.errors import AcommError, DecodeError, CRCError, EncodeError
-from acomm.events import (CANCELED, DELIVERED, EV_RANGE_RECEIVED, EV_RECEIVED, EV_STATUS, EXPIRED, FAILED,
+from .. import imc
+from ..compat import ticks_add, ticks_diff
+from ..errors import AcommError, DecodeError, CRCError, EncodeError
+from ..events import (CANCELED, DELIVERED, EV_RANGE_RECEIVED, EV_RECEIVED, EV_STATUS, EXPIRED, FAILED,
                           QUEUED, TRANSMITTED, WAITING)
-from acomm.imc import enums as E
-from acomm.link import BROADCAST
+from ..imc import enums as E
+from ..link import BROADCAST
 
 from .imcpeers import ACOMM_NODE, ACOMM_UID, ImcPeers
 
@@ -80,7 +80,7 @@ class ImcGateway:
         self.announce_ms = announce_ms
         self.sys_type = sys_type
         self.services = list(services)  # more URLs to announce (AnnounceService's job in DUNE)
-        self.uid = uid or "%x-%x" % (int(time.time() * 1000) & 0xFFFFFFFF, id(self) & 0xFFFF)
+        self.uid = uid or "%x-%x" % (int(self.wall() * 1000) & 0xFFFFFFFF, id(self) & 0xFFFF)
         self.peers = ImcPeers(imc_id, self.uid, static)
         self._reqs = {}  # acomm request id -> _Req, until its final status
         self._out = []

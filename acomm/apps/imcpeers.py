@@ -14,7 +14,7 @@
 # Both tables are bounded; when full, the entry heard longest ago goes.
 # Endpoints are (host, port) with host a dotted quad.
 
-from acomm.compat import ticks_diff
+from ..compat import ticks_diff
 
 ACOMM_NODE = "acomm://node/"  # + "<node id>/<acomm name>"
 ACOMM_UID = "acomm://uid/"  # + a per-process token: our own announce looped back
