@@ -105,6 +105,7 @@ class Station:
             self.inbox.append(it)
 
     def take_inbox(self):
+        """The messages received since the last call, oldest first: [(source, kind, values)]."""
         got = self.inbox
         self.inbox = []
         return got

@@ -69,7 +69,6 @@ class AtChannel:
         self._deadline = 0
         self._prompt = None
         self._ends = ()
-        self._block_next = False
         self._numeric = False
         self._mode = _LINES
         self._n = 0
@@ -104,7 +103,6 @@ class AtChannel:
         self._deadline = ticks_add(now, timeout_ms)
         self._prompt = prompt
         self._ends = ends
-        self._block_next = block
         self._mode = _B_WAIT if block else _LINES
         self._n = 0
         self._over = False

@@ -26,7 +26,7 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
 from .atcommand import R_OK, R_TIMEOUT, AtChannel
-from .slotbase import IDLE, S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
+from .slotbase import S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -262,5 +262,3 @@ class AtDriver(SlotDriver):
         self.start(now)
         self._lost(now, reason)
 
-    def slot_idle(self):
-        return self.slot.state == IDLE

@@ -150,11 +150,6 @@ def _decode_address(pdu, i, semi):
     return ("+" + s if ton & 0x70 == 0x10 else s), i + 2 + octets
 
 
-def same_number(a, b):
-    # the same digits, whatever the prefix
-    return a.lstrip("+") == b.lstrip("+")
-
-
 # -- user data ---------------------------------------------------------------------------------
 def _encode_ud(dcs, data):
     if alphabet(dcs) == 0:

@@ -82,7 +82,3 @@ class TransparentDriver(SansIO):
         if self._tx_handle is not None and ticks_diff(now, self._busy_until) >= 0:
             self._events.append((EV_TX_DONE, self._tx_handle))
             self._tx_handle = None
-
-    @property
-    def decoder_stats(self):
-        return (self._dec.frames, self._dec.oversize, self._dec.bad_escapes)

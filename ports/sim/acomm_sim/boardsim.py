@@ -124,7 +124,7 @@ def run_board(config, peers, ms=60000, seed=1, via=None, board_position=(0.0, 0.
         "peer_packets": got,
         "relayed": board.transport.stats["relayed"],
         "station": None if board.station is None else dict(board.station.stats),
-        "inbox": [] if board.station is None else list(board.station.inbox),
+        "inbox": [] if board.station is None else board.station.take_inbox(),
         "board": dict(board.stats),
         "mem_peak": board.mem_peak,
     }

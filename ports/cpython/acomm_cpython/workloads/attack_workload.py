@@ -185,10 +185,10 @@ class Attack(Forger):
             def spy(now, link, src, dst, head, data, authed=False, t=t, on_segment=on_segment):
                 kind = None if authed else self.forged.get((head, bytes(data)))
                 bad = t.stats["rx_bad"]
-                refused = sum(t.node.guard.refused.values())
+                refused = sum(t.guard.refused.values())
                 on_segment(now, link, src, dst, head, data, authed)
                 if kind == "sack_bitmap" and t.stats["rx_bad"] == bad and sum(
-                        t.node.guard.refused.values()) == refused:
+                        t.guard.refused.values()) == refused:
                     self.won[kind] += 1
                 n = sum(r.size for r in t._rx.values())
                 self.max_rx_bytes = max(self.max_rx_bytes, n)
