@@ -1,4 +1,4 @@
-# V.250 framing of the AT surface modems (issue 22), emulators and drivers
+# V.250 framing of the AT surface modems, emulators and drivers
 # on both runtimes. The emulators answer as ISU AT Command Reference table
 # 3-1 and 27.007 say for the mode the host set (verbose: CR LF text CR LF;
 # numeric: text CR LF and result "0" CR; ATQ1: no result codes), and the

@@ -3,7 +3,7 @@
 # reports it ($CATXP,0 / $CATXF,0) before it asks for data with $CADRQ; PSK
 # rates go straight to $CADRQ. Host software written for the real modem
 # (pyacomms' WaitingForCiTxf state) waits for that $CATXF and would never
-# send $CCTXD without it (issue 22). Also: $CAACK only when the sender asked
+# send $CCTXD without it. Also: $CAACK only when the sender asked
 # for an acknowledgement. Emulator and driver, both runtimes.
 from acomm.drivers import micromodem_nmea as nm
 from acomm.drivers.micromodem import MicroModemDriver

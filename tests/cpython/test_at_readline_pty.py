@@ -3,7 +3,7 @@
 # factory defaults (echo on, verbose results), and nothing but readline()
 # (and read_until for the prompts and blocks that end no line). This is how
 # RockBLOCK and SMS example scripts are written; an emulator that framed its
-# answers other than the real unit would leave them waiting (issue 22: the
+# answers other than the real unit would leave them waiting (the
 # READY of +SBDWB glued to the echo). CPython only; every read has a
 # timeout, so a hang is a failure, not a stuck test.
 
@@ -141,7 +141,7 @@ def test_evologics_im_from_a_readline_host(tmp_path):
 def test_micromodem_rate0_from_a_host_that_waits_for_the_cycle_init(tmp_path):
     # a host written for the real modem (pyacomms' states): after $CACYC at
     # rate 0 it waits for the cycle init's $CATXF before it expects $CADRQ,
-    # and only then sends $CCTXD (issue 22: the emulator used to skip it,
+    # and only then sends $CCTXD (the emulator used to skip it,
     # and such a host never sent its data)
     from acomm.drivers import micromodem_nmea as nm
 

@@ -1,4 +1,4 @@
-# BENCHMARKS.md is in step with `acomm bench compare` (issue 12): its text
+# BENCHMARKS.md is in step with `acomm bench compare`: its text
 # is what the generator renders from the figures it keeps, and the figures
 # that do not depend on timing (bytes, limits, ratios, airtime) are what the
 # code computes today. Timings are never checked. Peers that are not

@@ -1,4 +1,4 @@
-# Issue 9's proof without hardware: each board definition is flashed with
+# The boards, proven without hardware: each board definition is flashed with
 # `acomm flash` (modules compiled by mpy-cross, for x64 so the unix port can
 # load them) to the fake board (tools/fakeboard.py: the MicroPython unix
 # port behind a pty, driven by mpremote as a real board is), and then the

@@ -1,4 +1,4 @@
-# Record and replay (issue 22): the capture format (acomm_cpython.capture),
+# Record and replay: the capture format (acomm_cpython.capture),
 # `acomm replay` (acomm_cpython.replay) over the shipped fixture of every
 # device (tests/cpython/fixtures/captures, made by tools/make_captures.py
 # from acomm_cpython.capture_sessions), damaged files reported by line, and

@@ -1,4 +1,4 @@
-# The fuzz engine of `acomm fuzz` (issue 10): random and mutated inputs
+# The fuzz engine of `acomm fuzz`: random and mutated inputs
 # against acomm's decoders, drivers and store, on both runtimes.
 #
 # It lives in the simulator package, not in acomm/: it is test tooling that

@@ -206,7 +206,7 @@ class MicroModemEmulator(SansIO, FaultModes):
         if rate == 0:
             # FSK: the cycle header goes out first as its own mini-packet,
             # reported by $CATXF; only then the data request (pyacomms'
-            # WaitingForCiTxf state waits for that $CATXF, issue 22)
+            # WaitingForCiTxf state waits for that $CATXF)
             self.xcvr.send_cycle_init(now, self._drq)
         else:
             self._drq(now)

@@ -1,4 +1,4 @@
-# The fixed workload of `acomm bench compare` (issue 12) and acomm's side of
+# The fixed workload of `acomm bench compare` and acomm's side of
 # it: six things a vehicle, a diver or an operator sends, each with the
 # acomm message that carries it, its information limit, and acomm's bytes
 # in each frame form. Portable (acomm only): compare_speed runs it under the

@@ -1,5 +1,5 @@
 # `acomm bench compare`: acomm side by side with what users would pick
-# instead (issue 12), on compare_items' fixed workload. BENCHMARKS.md is
+# instead, on compare_items' fixed workload. BENCHMARKS.md is
 # written from these lines by tools/mkbenchmarks.py.
 #
 #   bytes       bytes_<item>_<encoding>: acomm_payload (catalog bytes, no

@@ -1,4 +1,4 @@
-# `acomm bench soak`: the fault injection soak (issue 10). The demo
+# `acomm bench soak`: the fault injection soak. The demo
 # network (docs/demo.md: buoy, diver and AUV on SeaTrac beacons, their
 # places, the channel's loss curve) runs 24 simulated hours of transport
 # packets, each node with a Transport on a store file in a temporary
