@@ -119,8 +119,8 @@ def soak(net, seed, rounds, gap_ms, life, payload, modem_fault, events):
         if i in events:
             events[i](net)
         net.run(gap_ms, step=50)
-    links = [net.nodes[n].links["acoustic"] for n in ids]
-    assert net.run(900000, step=50, until=lambda: all(not ln._active for ln in links))
+    # until every request has its final status (check_exactly_one_final below: not two)
+    assert net.run(900000, step=50, until=lambda: all(net.rec(n).final(r) is not None for n in ids for r in ids[n]))
     finals = {}
     for name in ids:
         rec = net.rec(name)
