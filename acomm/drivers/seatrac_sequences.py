@@ -1,4 +1,8 @@
-# What the SeaTrac driver does before it lets the link send, and again after
+# The two sequences the SeaTrac driver (acomm.drivers.seatrac) runs on the
+# beacon's command slot: its configuration (SeatracConfig) and the one
+# acoustic transaction under way (AcousticSlot).
+#
+# The configuration, before the driver lets the link send, and again after
 # the beacon restarted or fell silent:
 #
 #   SYS_INFO        model (X110/X150), serial number, firmware, uptime
@@ -12,48 +16,56 @@
 # (ref/modem-protocols.md section 8), so the record length and the offset of
 # the beacon id are parameters, and a record of another length is never
 # written back: the driver then trusts the configured id without checking.
+#
+# The transaction: a DAT_SEND or PING_SEND from the moment the link hands it
+# to the driver until the beacon's final word on it.
+#
+#   QUEUED  accepted from the link, command not written yet (the serial line
+#           is busy, or the beacon is known to be busy for a while)
+#   CMD     command written, waiting for its status (OK or a CST_E error)
+#   AIR     the beacon took it: EV_TX_DONE when our packet has left (from
+#           the airtime model; the beacon does not say), then for REQ types
+#           the remote's automatic reply (EV_DELIVERED / EV_RANGE) or the
+#           beacon's DAT_ERROR / PING_ERROR, or our own watchdog.
 
 from ..compat import const, ticks_add, ticks_diff
 from . import seatrac_wire as w
+from .slotbase import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
-_EV_DRIVER_DOWN = const(7)
+_EV_DELIVERED = const(3)
+_EV_RANGE = const(5)
+_EV_TX_DONE = const(2)
+_EV_TX_FAILED = const(4)
 
 _MODELS = {w.PART_X150: "X150", w.PART_X110: "X110"}
 
 
-class SeatracConfig:
+class SeatracConfig(ConfigSequence):
+    """The beacon's configuration: info, settings, and the beacon id written when it differs."""
+
     def __init__(self, driver, beacon_id, set_beacon_id, settings_len, id_offset, retry_ms, reboot_wait_ms):
         if settings_len + 1 > w.MAX_MSG or not 0 <= id_offset < settings_len:
             raise ValueError("settings_len / id_offset do not fit a SeaTrac message")
-        self.d = driver
+        ConfigSequence.__init__(self, driver, retry_ms)
         self.want_id = beacon_id
         self.own_id = beacon_id  # until the beacon says otherwise
         self.set_beacon_id = set_beacon_id
         self.settings_len = settings_len
         self.id_offset = id_offset
-        self.retry_ms = retry_ms
         self.reboot_wait_ms = reboot_wait_ms
         self.max_id_writes = 1  # never reboot-loop a beacon that ignores us
         self.id_writes = 0
         self.settings = bytearray(settings_len)
         self.info = {}
-        self.problem = None  # why the id could not be checked or set
-        self.down_reported = False
-        self.fails = 0
         self._next = w.CID_SYS_INFO
-        self._wait = None
         self._rebooting = False
 
-    def start(self, now):
+    def first(self):
         self._next = w.CID_SYS_INFO
-        self._wait = None
 
-    def pump(self, now):
-        if self._wait is not None and ticks_diff(now, self._wait) < 0:
-            return
-        self._wait = None
+    def step(self, now):
         cid = self._next
         m = self.d._msg
         n = 1
@@ -65,21 +77,6 @@ class SeatracConfig:
             m[2] = w.REBOOT_CHECK >> 8
             n = 3
         self.d.command(now, cid, n)
-
-    def failed(self, now, reason):
-        # Start over after a pause; say the modem is down once it has
-        # failed often enough (once per outage).
-        self.fails += 1
-        if self.fails >= self.d.down_after and not self.down_reported:
-            self.down_reported = True
-            self.d._events.append((_EV_DRIVER_DOWN, reason))
-        self._next = w.CID_SYS_INFO
-        self._wait = ticks_add(now, self.retry_ms)
-
-    def _done(self, now):
-        self.fails = 0
-        self.down_reported = False
-        self.d.configured(now)
 
     def response(self, now, b, n):
         cid = b[0]
@@ -131,8 +128,8 @@ class SeatracConfig:
         off = self.id_offset
         if n - 1 != ln or not 1 <= b[1 + off] <= 15:
             # not the layout we know: use the configured id unchecked
+            self.done(now)
             self.problem = "SETTINGS_T of %d bytes: beacon id not checked" % (n - 1)
-            self._done(now)
             return
         s = self.settings
         for i in range(ln):
@@ -142,16 +139,14 @@ class SeatracConfig:
         want = self.want_id
         if want is None or have == want:
             self.own_id = have
-            self.problem = None
-            self._done(now)
+            self.done(now)
             return
         if self.set_beacon_id and self.id_writes < self.max_id_writes:
             self.id_writes += 1
             s[off] = want
             self._next = w.CID_SETTINGS_SET
             return
-        self.problem = "beacon id is %d, not %d" % (have, want)
-        self.failed(now, self.problem)
+        self.failed(now, "beacon id is %d, not %d" % (have, want))
 
     def _timing(self, s, off):
         # The reply timeout the beacon works with, for the driver's own
@@ -173,3 +168,101 @@ class SeatracConfig:
 
 
 _NAMES = {w.CID_SETTINGS_SET: "SETTINGS_SET", w.CID_SETTINGS_SAVE: "SETTINGS_SAVE", w.CID_SYS_REBOOT: "SYS_REBOOT"}
+
+
+CMD = const(2)
+AIR = const(3)
+
+K_DAT = const(0)
+K_PING = const(1)
+
+REQ_TYPES = (w.MSG_REQ, w.MSG_REQU, w.MSG_REQX)
+
+
+class AcousticSlot(SlotBase):
+    def __init__(self, driver):
+        SlotBase.__init__(self, driver, 31)
+        self.mtype = 0
+        self.deadline = None  # stop waiting for the beacon's reply
+
+    def accept(self, handle, kind, addr, mtype, data):
+        self._take(handle, kind, addr, data)
+        self.mtype = mtype
+        self.deadline = None
+
+    def build(self, msg):
+        # Fills msg (CID at [0]) with the command; returns (cid, length).
+        msg[1] = self.addr
+        msg[2] = self.mtype
+        self.state = CMD
+        if self.kind == K_PING:
+            return w.CID_PING_SEND, 3
+        n = self.n
+        msg[3] = n
+        msg[4 : 4 + n] = memoryview(self.buf)[:n]
+        return w.CID_DAT_SEND, 4 + n
+
+    def busy_ms(self):
+        # how long the beacon may stay busy with this transaction
+        d = self.d
+        t = d.airtime_ms(self.n)
+        if self.mtype in REQ_TYPES:
+            t += d.reply_window_ms()
+        return t
+
+    def command_status(self, now, status):
+        # The beacon's answer to our command. Returns the time before which
+        # no new acoustic command should be written, or None.
+        if status != w.CST_OK:
+            self.fail(w.status_name(status))
+            if status == w.CST_XCVR_BUSY:
+                return ticks_add(now, self.d.busy_backoff_ms)
+            return None
+        d = self.d
+        self.state = AIR
+        air = d.airtime_ms(self.n)
+        if self.kind == K_DAT:
+            self.done_at = ticks_add(now, air)
+        if self.mtype in REQ_TYPES:
+            self.deadline = ticks_add(now, air + d.reply_window_ms() + d.margin_ms)
+        return None
+
+    def poll(self, now):
+        # Returns True when the watchdog gave up on the beacon.
+        if self.state != AIR:
+            return False
+        if self.done_at is not None and ticks_diff(now, self.done_at) >= 0:
+            self.tx_done()
+            if self.deadline is None:
+                self.state = IDLE  # one-way: nothing more will come
+                return False
+        if self.deadline is not None and ticks_diff(now, self.deadline) >= 0:
+            self.fail("no reply from the modem")
+            return True
+        return False
+
+    def awaiting(self, kind, src):
+        return self.state == AIR and self.kind == kind and self.deadline is not None and src == self.addr
+
+    def tx_done(self):
+        if self.done_at is not None:
+            self.done_at = None
+            self.d._events.append((_EV_TX_DONE, self.handle))
+
+    def fail(self, reason):
+        self.state = IDLE
+        self.done_at = None
+        self.d._events.append((_EV_TX_FAILED, self.handle, reason))
+
+    def delivered(self):
+        self.tx_done()
+        self.state = IDLE
+        self.d._events.append((_EV_DELIVERED, self.handle))
+
+    def dat_error(self, status):
+        self.tx_done()  # the packet did go out; nobody answered it
+        self.fail(w.status_name(status))
+
+    def ranged(self, src, metres, fix):
+        self.state = IDLE
+        self.d._events.append((_EV_RANGE, self.handle, src if metres is not None else None, metres, fix))
