@@ -161,9 +161,8 @@ class AtDriver(SlotDriver):
     def _config_failed(self, now, reason):
         self.problem = reason
         self._fails += 1
-        if self._fails >= self.down_after and not self.down_reported:
-            self.down_reported = True
-            self._events.append((_EV_DRIVER_DOWN, reason))
+        if self._fails >= self.down_after:
+            self._say_down(reason)
         self._step = 0
         self._wait = ticks_add(now, self.retry_ms)
 
