@@ -1,7 +1,7 @@
 # The life of a driver for a Hayes-AT surface modem (Iridium SBD, GSM SMS),
 # shared by both: the start-up sequence, "up" and "down" (a modem that stops
 # answering, restarts, or has no signal), the periodic signal poll that also
-# serves as keepalive, and the one-request slot (acomm.drivers.slotbase).
+# serves as keepalive, and the one-request slot (acomm.drivers.base).
 # The subclass gives the command list, the work it does when the modem is
 # up (_work), what its commands' answers mean (_result, _info, _prompt,
 # _block), its URCs (_urc), its timers (_tick), how it reads the signal
@@ -26,7 +26,7 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
 from .atcommand import R_OK, R_TIMEOUT, AtChannel
-from .slotbase import IDLE, S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
+from .base import IDLE, S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)

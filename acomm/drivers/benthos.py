@@ -12,7 +12,7 @@
 # the modem's own prompt after the transmission, or with `+++` after a
 # guard time of silence when it does not know the mode (start-up, errors).
 #
-# One command is outstanding at a time (the command slot, slotbase); its
+# One command is outstanding at a time (the command slot, base.AcousticDriver); its
 # owner is the configuration or the link's transaction (benthos_sequences),
 # or a keepalive.
 
@@ -23,7 +23,7 @@ from ..events import EV_RX
 from . import benthos_wire as w
 from .benthos_sequences import (C_AT, C_ATO, C_ESCAPE, C_PAYLOAD, C_QUERY, C_RANGE, C_SET, IDLE, INFO, K_DATA, K_PING,
                                 QUEUED, AcousticSlot, BenthosConfig, answer, setup_steps, stray)
-from .slotbase import S_CONFIG, S_START, S_UP, AcousticDriver
+from .base import S_CONFIG, S_START, S_UP, AcousticDriver
 
 
 M_UNKNOWN = const(0)
@@ -153,17 +153,20 @@ class BenthosDriver(AcousticDriver):
         return self._accept(now, K_PING, addr, b"")
 
     def feed(self, now, data):
+        """Bytes read from the device."""
         self._now = now
         self._reader.feed(data)
         self.slot.poll(now, self.mode == M_COMMAND)
         self._pump(now)
 
     def poll(self, now):
+        """Let timers run: the command's and the transaction's deadlines, the escape's guard time, retries."""
         self._now = now
         if self._state == S_START:
             self._written = now  # the guard time counts from here
         self._begin(now)
-        self._poll_cmd(now)
+        if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
+            self._cmd_timed_out(now)
         self.slot.poll(now, self.mode == M_COMMAND)
         self._pump(now)
 

@@ -66,7 +66,7 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_RANGE, EV_TX_DONE, EV_TX_FAILED
 from . import benthos_wire as w
-from .slotbase import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
+from .base import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
 S_AT = const(0)
 S_SET = const(1)

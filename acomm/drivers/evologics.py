@@ -20,7 +20,7 @@ from . import evologics_wire as w
 from .evologics_sequences import (C_CTRL, C_PROBE, C_PTIME, C_SEND, CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING,
                                   KIND_NAMES, PTIME, QUEUED, R_BUSY, R_ERROR, R_OK, R_VALUE, AcousticSlot,
                                   EvologicsConfig)
-from .slotbase import S_CONFIG, S_UP, AcousticDriver
+from .base import S_CONFIG, S_UP, AcousticDriver
 
 
 class EvologicsDriver(AcousticDriver):
@@ -169,23 +169,22 @@ class EvologicsDriver(AcousticDriver):
         return self._accept(now, K_PING, addr, self.ping_payload)
 
     def feed(self, now, data):
-        self._now = now
+        """Bytes read from the device."""
         self._rx_at = now
-        self._reader.feed(data)
-        self._pump(now)
+        AcousticDriver.feed(self, now, data)
 
     def poll(self, now):
-        self._now = now
-        self._begin(now)
+        """Let timers run: a line cut short by silence, deadlines, probes, retries."""
         r = self._reader
         if r.partial() and ticks_diff(now, self._rx_at) >= self.rx_gap_ms:
+            self._now = now
             r.flush()  # a line that never ended
-        self._poll_cmd(now)
-        if self.slot.poll(now):
-            # it accepted a transmission and then said nothing: it may have
-            # restarted and lost its settings, so set it up again
-            self.refresh(now)
-        self._pump(now)
+        AcousticDriver.poll(self, now)
+
+    def _slot_gave_up(self, now):
+        # it accepted a transmission and then said nothing: it may have
+        # restarted and lost its settings, so set it up again
+        self.refresh(now)
 
     # -- writing commands --------------------------------------------------
     def command(self, now, what, text):

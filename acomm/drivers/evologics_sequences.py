@@ -19,7 +19,7 @@
 #   extra commands  site settings given to the constructor, each must be OK
 #
 # Every step is one command on the driver's command slot; a failed step
-# starts over after retry_ms (slotbase.ConfigSequence).
+# starts over after retry_ms (base.ConfigSequence).
 #
 # The transaction, from the moment the link hands it over until the modem's
 # final word:
@@ -38,7 +38,7 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_DELIVERED, EV_RANGE, EV_TX_DONE, EV_TX_FAILED
-from .slotbase import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
+from .base import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
 # What the command slot waits for (the driver's _cmd): a configuration step,
 # or one of the driver's own commands.

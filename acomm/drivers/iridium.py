@@ -34,7 +34,7 @@ from ..errors import AcommError, DecodeError, EncodeError
 from . import iridium_wire as w
 from .atcommand import R_END, R_OK, R_TIMEOUT
 from .atdriver import AtDriver
-from .slotbase import IDLE, QUEUED
+from .base import IDLE, QUEUED
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -42,7 +42,7 @@ _EV_RX = const(1)
 _EV_TX_DONE = const(2)
 _EV_TX_FAILED = const(4)
 
-# slot states after slotbase's IDLE and QUEUED
+# slot states after base's IDLE and QUEUED
 WRITING = const(2)
 LOADED = const(3)
 SESSION = const(4)

@@ -18,7 +18,7 @@ from ..events import EV_RX
 from . import micromodem_wire as w
 from .micromodem_sequences import ECHO, K_DATA, K_MINI, K_PING, AcousticSlot, MicroModemConfig
 from .micromodem_wire import BITRATE, FRAME_BYTES, Airtime, advert_to_mini, check_rate, mini_to_advert
-from .slotbase import S_CONFIG, AcousticDriver
+from .base import S_CONFIG, AcousticDriver
 
 
 class MicroModemDriver(AcousticDriver):
@@ -154,18 +154,6 @@ class MicroModemDriver(AcousticDriver):
         h = self._handle()
         self.slot.start(now, h, K_PING, addr)
         return h
-
-    def feed(self, now, data):
-        self._now = now
-        self._reader.feed(data)
-        self._pump(now)
-
-    def poll(self, now):
-        self._now = now
-        self._begin(now)
-        self._poll_cmd(now)
-        self.slot.poll(now)
-        self._pump(now)
 
     # -- the command slot ----------------------------------------------------------
     def write(self, line):

@@ -39,7 +39,7 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_DELIVERED, EV_RANGE, EV_TX_DONE, EV_TX_FAILED
 from . import micromodem_wire as w
-from .slotbase import ConfigSequence
+from .base import ConfigSequence
 
 
 class MicroModemConfig(ConfigSequence):

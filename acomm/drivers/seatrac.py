@@ -21,7 +21,7 @@ from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
 from . import seatrac_wire as w
 from .seatrac_sequences import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot, SeatracConfig
-from .slotbase import S_CONFIG, S_UP, AcousticDriver
+from .base import S_CONFIG, S_UP, AcousticDriver
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -179,18 +179,8 @@ class SeatracDriver(AcousticDriver):
         self._q_dirty = True
         self._pump(now)
 
-    def feed(self, now, data):
-        self._now = now
-        self._reader.feed(data)
-        self._pump(now)
-
-    def poll(self, now):
-        self._now = now
-        self._begin(now)
-        self._poll_cmd(now)
-        if self.slot.poll(now):
-            self._probe = True  # silent: did it restart?
-        self._pump(now)
+    def _slot_gave_up(self, now):
+        self._probe = True  # silent: did it restart?
 
     @property
     def junk(self):

@@ -30,7 +30,7 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from . import seatrac_wire as w
-from .slotbase import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
+from .base import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -38,8 +38,6 @@ _EV_DELIVERED = const(3)
 _EV_RANGE = const(5)
 _EV_TX_DONE = const(2)
 _EV_TX_FAILED = const(4)
-
-_MODELS = {w.PART_X150: "X150", w.PART_X110: "X110"}
 
 
 class SeatracConfig(ConfigSequence):
@@ -92,7 +90,8 @@ class SeatracConfig(ConfigSequence):
             self._settings(now, b, n)
         elif cid == w.CID_SETTINGS_SET or cid == w.CID_SETTINGS_SAVE or cid == w.CID_SYS_REBOOT:
             if n < 2 or b[1] != w.CST_OK:
-                self.failed(now, "%s refused: %s" % (_NAMES[cid], w.status_name(b[1]) if n >= 2 else "no status"))
+                name = "SETTINGS_SET" if cid == w.CID_SETTINGS_SET else "SETTINGS_SAVE" if cid == w.CID_SETTINGS_SAVE else "SYS_REBOOT"
+                self.failed(now, "%s refused: %s" % (name, w.status_name(b[1]) if n >= 2 else "no status"))
                 return
             if cid == w.CID_SETTINGS_SET:
                 self._next = w.CID_SETTINGS_SAVE
@@ -118,9 +117,13 @@ class SeatracConfig(ConfigSequence):
             "section": b[5],
             "firmware": "%d.%d.%d" % (b[31], b[32], w.u16(b, 33)),
         }
-        model = _MODELS.get(part)
         caps = self.d.caps
-        caps.model = model if model is not None else "SeaTrac part %d" % part
+        if part == w.PART_X150:
+            caps.model = "X150"
+        elif part == w.PART_X110:
+            caps.model = "X110"
+        else:
+            caps.model = "SeaTrac part %d" % part
         caps.serial = str(serial)
 
     def _settings(self, now, b, n):
@@ -165,9 +168,6 @@ class SeatracConfig(ConfigSequence):
             v = w.u16(s, 35)
             if 13000 <= v <= 17000:
                 d.vos = v // 10
-
-
-_NAMES = {w.CID_SETTINGS_SET: "SETTINGS_SET", w.CID_SETTINGS_SAVE: "SETTINGS_SAVE", w.CID_SYS_REBOOT: "SYS_REBOOT"}
 
 
 CMD = const(2)

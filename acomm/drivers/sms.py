@@ -29,7 +29,7 @@ from . import sms_pdu as pdu
 from . import sms_wire as w
 from .atcommand import R_OK, R_TIMEOUT
 from .atdriver import AtDriver
-from .slotbase import IDLE, QUEUED
+from .base import IDLE, QUEUED
 
 SENDING = const(2)
 K_SMS = const(0)

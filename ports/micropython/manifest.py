@@ -60,7 +60,6 @@ package(
         "drivers/seatrac.py",
         "drivers/seatrac_sequences.py",
         "drivers/seatrac_wire.py",
-        "drivers/slotbase.py",
         "drivers/sms.py",
         "drivers/sms_pdu.py",
         "drivers/sms_wire.py",

@@ -40,7 +40,6 @@ package(
         "drivers/seatrac.py",
         "drivers/seatrac_sequences.py",
         "drivers/seatrac_wire.py",
-        "drivers/slotbase.py",
         "errors.py",
         "events.py",
         "frame/__init__.py",
