@@ -24,7 +24,7 @@ from ..compat import const
 from ..codec.crc import nmea_xor
 from ..errors import AcommError
 from ..frame import ADVERT
-from .lineframe import SyncLines
+from .base import SyncLines
 
 _HEX = b"0123456789ABCDEF"
 
@@ -108,7 +108,7 @@ JUNK_FORMAT = "format"  # no checksum, or not 2/8 hex digits, or no name
 
 
 class LineReader(SyncLines):
-    # Cuts the stream into '$' sentences (the framing is lineframe's); each
+    # Cuts the stream into '$' sentences (the framing is base.SyncLines); each
     # good one goes to sink.on_sentence(buf, n) with buf[:n] the text between '$' and '*'
     # (valid until the next feed). Damaged lines are dropped, counted in
     # self.junk and reported to sink.on_junk(kind). One preallocated buffer;

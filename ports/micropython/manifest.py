@@ -52,7 +52,6 @@ package(
         "drivers/evologics_wire.py",
         "drivers/iridium.py",
         "drivers/iridium_wire.py",
-        "drivers/lineframe.py",
         "drivers/mac.py",
         "drivers/micromodem.py",
         "drivers/micromodem_sequences.py",

@@ -40,7 +40,6 @@ package(
         "drivers/caps.py",
         "drivers/iridium.py",
         "drivers/iridium_wire.py",
-        "drivers/lineframe.py",
         "drivers/seatrac.py",
         "drivers/seatrac_sequences.py",
         "drivers/seatrac_wire.py",

@@ -36,7 +36,6 @@ package(
         "drivers/__init__.py",
         "drivers/base.py",
         "drivers/caps.py",
-        "drivers/lineframe.py",
         "drivers/seatrac.py",
         "drivers/seatrac_sequences.py",
         "drivers/seatrac_wire.py",
