@@ -10,14 +10,16 @@ interface a driver offers to acomm.link.Link:
   send(now, addr, data, ack=False) -> handle
                         start transmitting one frame (ack: ask for a
                         delivery report where the modem gives one); raises
-                        EncodeError (bad size or address) or AcommError
-                        (not ready). What becomes of it comes later as
-                        events for the handle (EV_TX_DONE, EV_DELIVERED,
-                        EV_TX_FAILED; each driver's page says which)
+                        an acomm error when it cannot take it (EncodeError
+                        for a bad size or address; the link asks ready()
+                        first). What becomes of it comes later as events
+                        for the handle (EV_TX_DONE, EV_DELIVERED,
+                        EV_TX_FAILED; docs/drivers*.md say which)
   ping(now, addr) -> handle
                         ranging drivers only; never raises: a refused ping
-                        is an EV_TX_FAILED for its handle; the answer is an
-                        EV_RANGE (metres None when nobody answered)
+                        is an EV_TX_FAILED for its handle; otherwise it ends
+                        in one EV_RANGE (metres None when nobody answered)
+                        or EV_TX_FAILED
   feed(now, data)       bytes read from the device, split anywhere; bad
                         input is counted, never raised
   poll(now)             let timers run (deadlines, probes, retries)

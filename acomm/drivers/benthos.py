@@ -131,8 +131,12 @@ class BenthosDriver(AcousticDriver):
 
     # -- the driver interface ------------------------------------------------------
     def send(self, now, addr, data, ack=False):
-        # ack is ignored: the modem reports no delivery (the link adds its
-        # own acks because the caps lack CAP_RELIABLE)
+        """One frame to addr in online mode; it ends at EV_TX_DONE (or EV_TX_FAILED).
+
+        ack is ignored: the modem reports no delivery (the link adds its own
+        acks because the caps lack CAP_RELIABLE). Raises AcommError when not
+        ready, EncodeError for a bad size or address.
+        """
         if not self.ready(now):
             raise AcommError("Benthos modem not ready")
         n = len(data)
@@ -145,7 +149,7 @@ class BenthosDriver(AcousticDriver):
         return self._accept(now, K_DATA, addr, data)
 
     def ping(self, now, addr):
-        # never raises: problems come back as EV_TX_FAILED for the handle
+        """ATR to addr: EV_RANGE (metres None when nobody answered). Never raises."""
         if not isinstance(addr, int) or not 0 <= addr <= w.MAX_ADDR or addr == self.address:
             return self._refuse("cannot range address %r" % (addr,))
         if not self.ready(now):

@@ -139,6 +139,11 @@ class EvologicsDriver(AcousticDriver):
         return self._reader.junk
 
     def send(self, now, addr, data, ack=False):
+        """An instant message (up to 64 bytes; ack asks for DELIVEREDIM) or burst data (longer, always acknowledged).
+
+        Raises AcommError when not ready, EncodeError for a bad size or
+        address (burst data cannot be broadcast).
+        """
         if not self.ready(now):
             raise AcommError("EvoLogics modem not ready")
         n = len(data)
@@ -160,8 +165,7 @@ class EvologicsDriver(AcousticDriver):
         return self._accept(now, kind, addr, data)
 
     def ping(self, now, addr):
-        # Never raises (the link calls it without a guard): problems come
-        # back as EV_TX_FAILED for the returned handle.
+        """An acknowledged IM to addr, then AT?T: EV_RANGE from the propagation time. Never raises."""
         if not isinstance(addr, int) or not 0 <= addr <= 254 or addr == self.broadcast_addr:
             return self._refuse("cannot range to address %r" % (addr,))
         if not self.ready(now):

@@ -58,6 +58,12 @@ _CLEAR_TRIES = const(3)
 
 
 class IridiumDriver(AtDriver):
+    """An Iridium 9602/9603 SBD transceiver: one MO message per session to the gateway (addr is ignored).
+
+    EV_TX_DONE means handed to the gateway, never delivered. Raises
+    AcommError when not ready, EncodeError for a bad size.
+    """
+
     def __init__(
         self,
         address=None,

@@ -126,6 +126,11 @@ class MicroModemDriver(AcousticDriver):
         return self._reader.junk
 
     def send(self, now, addr, data, ack=False):
+        """One frame in a cycle to addr (ack: $CAACK gives EV_DELIVERED); a plain advert goes as a mini-packet.
+
+        Raises AcommError when not ready, EncodeError for a bad size or
+        address.
+        """
         if not self.ready(now):
             raise AcommError("Micro-Modem not ready")
         n = len(data)
@@ -146,7 +151,7 @@ class MicroModemDriver(AcousticDriver):
         return h
 
     def ping(self, now, addr):
-        # Never raises: problems come back as EV_TX_FAILED for the handle.
+        """$CCMPC to addr: EV_RANGE from the travel time (metres None without a reply). Never raises."""
         if not isinstance(addr, int) or not 0 <= addr <= self.max_addr or addr in (self.broadcast_addr, self.own_addr):
             return self._refuse("cannot ping address %r" % (addr,))
         if not self.ready(now):

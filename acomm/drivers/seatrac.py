@@ -145,6 +145,10 @@ class SeatracDriver(AcousticDriver):
         return self.config.own_id
 
     def send(self, now, addr, data, ack=False):
+        """One DAT_SEND to beacon addr (15: everyone, one-way); ack asks for the remote's automatic reply.
+
+        Raises AcommError when not ready, EncodeError for a bad size or id.
+        """
         if not self.ready(now):
             raise AcommError("SeaTrac not ready")
         n = len(data)
@@ -159,8 +163,7 @@ class SeatracDriver(AcousticDriver):
         return self._accept(now, K_DAT, addr, mtype, data)
 
     def ping(self, now, addr):
-        # Never raises (the link calls it without a guard): problems come
-        # back as EV_TX_FAILED for the returned handle.
+        """A PING_SEND to beacon addr: EV_RANGE with the USBL fix. Never raises (the link calls it unguarded)."""
         if not isinstance(addr, int) or not 1 <= addr <= 15:
             return self._refuse("cannot ping beacon id %r" % (addr,))
         if not self.ready(now):
