@@ -8,7 +8,7 @@
 #                      modem_wait_ms up to `retries` times, then the modem
 #                      counts as lost (EV_DRIVER_DOWN, start-up again);
 #   the acoustic slot  one data frame, mini-packet or ping from the moment
-#                      the link hands it over until its end (micromodem_slot).
+#                      the link hands it over until its end (micromodem_sequences).
 # Received frames, mini-packets and reboots arrive at any time in between.
 
 from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
