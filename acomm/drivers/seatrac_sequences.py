@@ -90,7 +90,9 @@ class SeatracConfig(ConfigSequence):
             self._settings(now, b, n)
         elif cid == w.CID_SETTINGS_SET or cid == w.CID_SETTINGS_SAVE or cid == w.CID_SYS_REBOOT:
             if n < 2 or b[1] != w.CST_OK:
-                name = "SETTINGS_SET" if cid == w.CID_SETTINGS_SET else "SETTINGS_SAVE" if cid == w.CID_SETTINGS_SAVE else "SYS_REBOOT"
+                name = "SYS_REBOOT"
+                if cid != w.CID_SYS_REBOOT:
+                    name = "SETTINGS_SET" if cid == w.CID_SETTINGS_SET else "SETTINGS_SAVE"
                 self.failed(now, "%s refused: %s" % (name, w.status_name(b[1]) if n >= 2 else "no status"))
                 return
             if cid == w.CID_SETTINGS_SET:
