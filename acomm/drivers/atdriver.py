@@ -152,8 +152,7 @@ class AtDriver(SlotDriver):
             self._fails = 0
             self.problem = None
             self.down_reported = False
-            self._silent = 0
-            self._went_up()
+            self.configured(now)
             self._signal_said = True
             self._csq_at = ticks_add(now, self.csq_period_ms)
             self._say_signal(now)

@@ -133,8 +133,9 @@ class SlotDriver(SansIO):
             self._state = S_CONFIG
             self.config.start(now)
 
-    def _went_up(self):
-        # the configuration is done
+    def configured(self, now):
+        """Called when the configuration's last step is done: the driver is up."""
+        self._silent = 0
         self._state = S_UP
         self._events.append((_EV_DRIVER_UP,))
 
@@ -266,11 +267,6 @@ class AcousticDriver(SlotDriver):
             self._probe = False
             self._probe_after = ticks_add(now, self.probe_gap_ms)
         return due
-
-    def configured(self, now):
-        """Called by the configuration when its last step is done: the driver is up."""
-        self._silent = 0
-        self._went_up()
 
     def _set_up_again(self, now, wait_ms=0):
         # whatever the command slot held is gone: configure the modem again
