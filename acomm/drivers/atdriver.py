@@ -1,7 +1,7 @@
 # The life of a driver for a Hayes-AT surface modem (Iridium SBD, GSM SMS),
 # shared by both: the start-up sequence, "up" and "down" (a modem that stops
 # answering, restarts, or has no signal), the periodic signal poll that also
-# serves as keepalive, and the one-request slot (acomm.drivers.slotbase).
+# serves as keepalive, and the one-request slot (acomm.drivers.base).
 # The subclass gives the command list, the work it does when the modem is
 # up (_work), what its commands' answers mean (_result, _info, _prompt,
 # _block), its URCs (_urc), its timers (_tick), how it reads the signal
@@ -26,7 +26,7 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
 from .atcommand import R_OK, R_TIMEOUT, AtChannel
-from .slotbase import S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
+from .base import S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -152,8 +152,7 @@ class AtDriver(SlotDriver):
             self._fails = 0
             self.problem = None
             self.down_reported = False
-            self._silent = 0
-            self._went_up()
+            self.configured(now)
             self._signal_said = True
             self._csq_at = ticks_add(now, self.csq_period_ms)
             self._say_signal(now)
@@ -161,9 +160,8 @@ class AtDriver(SlotDriver):
     def _config_failed(self, now, reason):
         self.problem = reason
         self._fails += 1
-        if self._fails >= self.down_after and not self.down_reported:
-            self.down_reported = True
-            self._events.append((_EV_DRIVER_DOWN, reason))
+        if self._fails >= self.down_after:
+            self._say_down(reason)
         self._step = 0
         self._wait = ticks_add(now, self.retry_ms)
 

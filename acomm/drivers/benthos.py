@@ -12,19 +12,18 @@
 # the modem's own prompt after the transmission, or with `+++` after a
 # guard time of silence when it does not know the mode (start-up, errors).
 #
-# One command is outstanding at a time; its owner is the start-up sequence
-# (benthos_config), the link's transaction (benthos_slot) or a keepalive.
+# One command is outstanding at a time (the command slot, base.AcousticDriver); its
+# owner is the configuration or the link's transaction (benthos_sequences),
+# or a keepalive.
 
 from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, Capabilities
-from ..compat import const, ticks_add, ticks_diff
+from ..compat import const, ticks_diff
 from ..errors import AcommError, EncodeError
 from ..events import EV_RX
 from . import benthos_wire as w
-from .benthos_answers import C_AT, C_ATO, C_ESCAPE, C_PAYLOAD, C_QUERY, C_RANGE, C_SET, INFO, answer, stray
-from .benthos_config import BenthosConfig, setup_steps
-from .benthos_lines import LineSplitter, RxBlock
-from .benthos_slot import IDLE, K_DATA, K_PING, QUEUED, Slot
-from .slotbase import S_CONFIG, S_START, S_UP, SlotDriver
+from .benthos_sequences import (C_AT, C_ATO, C_ESCAPE, C_PAYLOAD, C_QUERY, C_RANGE, C_SET, IDLE, INFO, K_DATA, K_PING,
+                                QUEUED, AcousticSlot, BenthosConfig, answer, setup_steps, stray)
+from .base import S_CONFIG, S_START, S_UP, AcousticDriver
 
 
 M_UNKNOWN = const(0)
@@ -37,7 +36,13 @@ _O_SLOT = const(1)
 _O_PROBE = const(2)
 
 
-class BenthosDriver(SlotDriver):
+class BenthosDriver(AcousticDriver):
+    """A Teledyne Benthos ATM-9xx modem: frames in online mode (no delivery report), ATR ranging.
+
+    Addresses are 0..249, 255 broadcasts; frames are 1..mtu bytes. Raises
+    AcommError for settings out of range.
+    """
+
     def __init__(
         self,
         address=None,
@@ -60,7 +65,7 @@ class BenthosDriver(SlotDriver):
         down_after=3,
         banner_marks=("Teledyne Benthos", "Benthos ATM"),
     ):
-        SlotDriver.__init__(self)
+        AcousticDriver.__init__(self)
         if tx_rate not in w.RATES:
             raise AcommError("Benthos @TxRate codes are 2..13, not %r" % (tx_rate,))
         if not 1 <= mtu <= w.MAX_FRAME:
@@ -99,7 +104,7 @@ class BenthosDriver(SlotDriver):
         )
         steps = setup_steps(address, tx_rate, fwd_delay_ms, rcv_all, ac_rsp_tmo_ms, extra_settings, prompt_setting)
         self.config = BenthosConfig(self, steps, retry_ms)
-        self.slot = Slot(self, mtu)
+        self.slot = AcousticSlot(self, mtu)
         self.remote = None  # the @RemoteAddr the modem last confirmed
         self.last_rx = None  # the receive statistics of the last good packet
         self.stats = {
@@ -107,24 +112,18 @@ class BenthosDriver(SlotDriver):
             "escapes": 0,
             "reboots": 0,
             "echo": 0,  # our own command lines echoed back
-            "unexpected": 0,  # well-formed lines that answer nothing
+            "unknown": 0,  # well-formed lines that answer nothing
             "refused": 0,
         }
         self.junk = {}
-        self._lines = LineSplitter(2 * rx_max + 32, self)
-        self.rx = RxBlock(rx_max, self)
+        self._reader = w.LineReader(2 * rx_max + 32, self)
+        self.rx = w.RxBlock(rx_max, self)
         self.mode = M_UNKNOWN
-        self._cmd = 0
         self._owner = _O_CONFIG
         self._text = ""  # the command line, for echo and messages
         self._want = None  # (name, value) of a setting or query
-        self._deadline = 0
         self._written = None  # when we last wrote to the modem
-        self._heard = None
-        self._hold_until = None
-        self._silent = 0
         self._probe_cmd = False  # the keepalive expects command mode
-        self._now = 0
 
     # -- timing model ------------------------------------------------------------
     def airtime_ms(self, nbytes):
@@ -132,8 +131,12 @@ class BenthosDriver(SlotDriver):
 
     # -- the driver interface ------------------------------------------------------
     def send(self, now, addr, data, ack=False):
-        # ack is ignored: the modem reports no delivery (the link adds its
-        # own acks because the caps lack CAP_RELIABLE)
+        """One frame to addr in online mode; it ends at EV_TX_DONE (or EV_TX_FAILED).
+
+        ack is ignored: the modem reports no delivery (the link adds its own
+        acks because the caps lack CAP_RELIABLE). Raises AcommError when not
+        ready, EncodeError for a bad size or address.
+        """
         if not self.ready(now):
             raise AcommError("Benthos modem not ready")
         n = len(data)
@@ -146,7 +149,7 @@ class BenthosDriver(SlotDriver):
         return self._accept(now, K_DATA, addr, data)
 
     def ping(self, now, addr):
-        # never raises: problems come back as EV_TX_FAILED for the handle
+        """ATR to addr: EV_RANGE (metres None when nobody answered). Never raises."""
         if not isinstance(addr, int) or not 0 <= addr <= w.MAX_ADDR or addr == self.address:
             return self._refuse("cannot range address %r" % (addr,))
         if not self.ready(now):
@@ -154,19 +157,20 @@ class BenthosDriver(SlotDriver):
         return self._accept(now, K_PING, addr, b"")
 
     def feed(self, now, data):
+        """Bytes read from the device."""
         self._now = now
-        self._lines.feed(data)
+        self._reader.feed(data)
         self.slot.poll(now, self.mode == M_COMMAND)
         self._pump(now)
 
     def poll(self, now):
+        """Let timers run: the command's and the transaction's deadlines, the escape's guard time, retries."""
         self._now = now
         if self._state == S_START:
-            self._state = S_CONFIG
             self._written = now  # the guard time counts from here
-            self.config.start(now)
-        if self._cmd and ticks_diff(now, self._deadline) >= 0:
-            self._timed_out(now)
+        self._begin(now)
+        if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
+            self._cmd_timed_out(now)
         self.slot.poll(now, self.mode == M_COMMAND)
         self._pump(now)
 
@@ -176,9 +180,8 @@ class BenthosDriver(SlotDriver):
         self._written = now
 
     def _command(self, now, kind, text, timeout_ms=None):
-        self._cmd = kind
         self._text = text
-        self._deadline = ticks_add(now, timeout_ms if timeout_ms is not None else self.cmd_timeout_ms)
+        self._await(now, kind, timeout_ms if timeout_ms is not None else self.cmd_timeout_ms)
         self._write(now, text.encode())
         self._write(now, b"\r")
 
@@ -204,10 +207,9 @@ class BenthosDriver(SlotDriver):
         # online now: the bytes go out as they are; the modem answers
         # after the forwarding delay
         self.mode = M_ONLINE
-        self._cmd = C_PAYLOAD
         self._text = ""
         serial_ms = len(data) * 10000 // self.baud
-        self._deadline = ticks_add(now, self.fwd_delay_ms + serial_ms + self.cmd_timeout_ms)
+        self._await(now, C_PAYLOAD, self.fwd_delay_ms + serial_ms + self.cmd_timeout_ms)
         self._write(now, data)
 
     def hold(self, until):
@@ -221,12 +223,8 @@ class BenthosDriver(SlotDriver):
         # the next command, if the serial line is free: the escape when the
         # mode is unknown, then the start-up sequence, the link's
         # transaction, or a keepalive
-        if self._cmd:
+        if self._cmd or self._held(now):
             return
-        if self._hold_until is not None:
-            if ticks_diff(now, self._hold_until) < 0:
-                return
-            self._hold_until = None
         if self._state == S_START:
             return
         up = self._state == S_UP
@@ -260,8 +258,8 @@ class BenthosDriver(SlotDriver):
             self.config.pump(now)
 
     # -- outcomes of commands ----------------------------------------------------------
-    def _finish(self, now, ok, detail):
-        kind = self._cmd
+    def _finish(self, now, kind, ok, detail):
+        # the command kind ended (ok or not)
         self._cmd = 0
         if not ok:
             self.stats["refused"] += 1
@@ -275,52 +273,40 @@ class BenthosDriver(SlotDriver):
         elif self._owner == _O_CONFIG and kind != C_ESCAPE:
             self.config.reply(now, ok, detail)
 
-    def _timed_out(self, now):
-        kind = self._cmd
-        self.stats["cmd_timeouts"] += 1
-        self._silent += 1
+    def _unanswered(self, now, kind):
+        # the command kind timed out
         if kind == C_ESCAPE:
             # a modem whose prompt is not (yet) `user:N>` escapes silently:
             # carry on, the next command tells
-            self._finish(now, True, "")
+            self._finish(now, kind, True, "")
         else:
             what = {C_ATO: "no CONNECT", C_PAYLOAD: "no " + w.FWD_UP}.get(kind)
             self.mode = M_UNKNOWN
-            self._finish(now, False, what or "no reply")
-        if self._silent >= self.down_after and self._state == S_UP:
-            self.lost(now, "modem not answering")
+            self._finish(now, kind, False, what or "no reply")
 
     # -- state changes -------------------------------------------------------------------
     def configured(self, now):
-        self._silent = 0
+        """Called by the configuration when its last step is done: the driver is up."""
         self.remote = None
-        self._went_up()
+        AcousticDriver.configured(self, now)
 
     def lost(self, now, reason):
-        # The modem restarted or fell silent: whatever it was doing is gone.
+        """The modem restarted or fell silent: whatever it was doing is gone; configure it again."""
         self._went_down(reason)
         self.slot.lost(reason)
-        self._cmd = 0
-        self._silent = 0
-        self._hold_until = None
         self.remote = None
         self.mode = M_UNKNOWN
         self.rx.reset()
-        self._state = S_CONFIG
-        self.config.start(now)
+        self._set_up_again(now)
 
-    # -- lines from the modem (LineSplitter and RxBlock sink) ---------------------------
+    # -- lines from the modem (LineReader and RxBlock sink) -----------------------------
     def on_junk(self, kind):
         self.junk[kind] = self.junk.get(kind, 0) + 1
 
     def on_block(self, src, dst, data, stats):
-        self._alive()
+        self._heard_from(self._now)
         self.last_rx = stats
         self._events.append((EV_RX, src, dst, data))
-
-    def _alive(self):
-        self._heard = self._now
-        self._silent = 0
 
     def on_line(self, raw, is_prompt):
         now = self._now
@@ -330,7 +316,7 @@ class BenthosDriver(SlotDriver):
                 return
         s = raw.decode().strip()
         if is_prompt:
-            self._alive()
+            self._heard_from(now)
             self.rx.prompt()
             self._prompt(now)
             return
@@ -338,7 +324,7 @@ class BenthosDriver(SlotDriver):
             return
         for m in self.banner_marks:
             if m in s:
-                self._alive()
+                self._heard_from(now)
                 self.stats["reboots"] += 1
                 self.lost(now, "modem rebooted")
                 return
@@ -351,9 +337,9 @@ class BenthosDriver(SlotDriver):
                 self.lost(now, "modem restarted (its echo is back)")
             return
         if self._reply(now, s):
-            self._alive()
+            self._heard_from(now)
         else:
-            self.stats["unexpected"] += 1
+            self.stats["unknown"] += 1
 
     def _prompt(self, now):
         kind = self._cmd
@@ -365,11 +351,11 @@ class BenthosDriver(SlotDriver):
                 self.stats["reboots"] += 1
                 self.lost(now, "modem restarted (found online)")
                 return
-            self._finish(now, True, "")
+            self._finish(now, kind, True, "")
         elif kind == C_PAYLOAD:
             # back at the shell without having said it transmits
             self.mode = M_COMMAND
-            self._finish(now, False, "no " + w.FWD_UP)
+            self._finish(now, kind, False, "no " + w.FWD_UP)
         elif not kind:
             self.mode = M_COMMAND  # after a transmission, or a restart
         # otherwise the prompt that followed the previous command
@@ -380,5 +366,5 @@ class BenthosDriver(SlotDriver):
         if r is None:
             return stray(s)
         if r is not INFO:
-            self._finish(now, r[0], r[1])
+            self._finish(now, self._cmd, r[0], r[1])
         return True

@@ -53,6 +53,8 @@ _QUEUE_CAP = const(64)  # entries waiting for the port to take them
 
 
 class DatagramDriver(SansIO):
+    """UDP datagrams or TCP frames to peers' endpoints; the port does the I/O (feed_from, take_datagrams, sent)."""
+
     def __init__(
         self,
         node_id=None,

@@ -13,26 +13,23 @@
 # replies by their keyword, so they may arrive at any time.
 
 from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
-from ..compat import const, ticks_add, ticks_diff
+from ..compat import ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from . import evologics_rx as rx
+from ..events import EV_RX
 from . import evologics_wire as w
-from .evologics_config import EvologicsConfig
-from .evologics_slot import CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING, KIND_NAMES, PTIME, QUEUED, AcousticSlot
-from .slotbase import S_CONFIG, S_UP, SlotDriver
+from .evologics_sequences import (C_CTRL, C_PROBE, C_PTIME, C_SEND, CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING,
+                                  KIND_NAMES, PTIME, QUEUED, R_BUSY, R_ERROR, R_OK, R_VALUE, AcousticSlot,
+                                  EvologicsConfig)
+from .base import S_CONFIG, S_UP, AcousticDriver
 
 
-# command slot contents (the configuration steps use 1..7)
-C_SEND = const(20)
-C_PTIME = const(21)
-C_PROBE = const(22)
-C_CTRL = const(23)
+class EvologicsDriver(AcousticDriver):
+    """An EvoLogics S2C modem: instant messages (acknowledged or not), burst data, pings with a range.
 
-class EvologicsDriver(SlotDriver):
-    R_OK = 1
-    R_ERROR = 2
-    R_BUSY = 3
-    R_VALUE = 4
+    Addresses are 0..254 (broadcast_addr is everyone); messages are 1..64
+    bytes, burst data up to burst_mtu. Raises AcommError for settings out
+    of range.
+    """
 
     def __init__(
         self,
@@ -64,7 +61,7 @@ class EvologicsDriver(SlotDriver):
         retry_ms=2000,
         down_after=3,
     ):
-        SlotDriver.__init__(self)
+        AcousticDriver.__init__(self)
         if address is not None and not 0 <= address <= 254:
             raise AcommError("EvoLogics addresses are 0..254, not %r" % (address,))
         if not 0 <= burst_mtu <= w.BURST_MAX or burst_mtu and burst_mtu <= w.IM_MAX:
@@ -117,16 +114,9 @@ class EvologicsDriver(SlotDriver):
             "async_errors": 0,  # ERROR EFAULT / OVERLOAD
         }
         self._reader = w.LineReader(self, w.RX_SPECS_16 if firmware16 else w.RX_SPECS, max(mtu, w.IM_MAX))
-        self._now = 0
         self._rx_at = 0
-        self._cmd = 0  # what the command slot waits for, 0 for nothing
-        self._cmd_deadline = 0
-        self._silent = 0  # commands timed out in a row
-        self._heard = None  # when the modem last answered
-        self._probe = False
         self._ctrl = False  # AT@CTRL due (someone took control)
         self._ptime = False  # AT?T due for last_ptime_us
-        self._hold_until = None  # no acoustic command before this
         self.slot = AcousticSlot(self, mtu)
 
     # -- timing model ------------------------------------------------------
@@ -149,6 +139,11 @@ class EvologicsDriver(SlotDriver):
         return self._reader.junk
 
     def send(self, now, addr, data, ack=False):
+        """An instant message (up to 64 bytes; ack asks for DELIVEREDIM) or burst data (longer, always acknowledged).
+
+        Raises AcommError when not ready, EncodeError for a bad size or
+        address (burst data cannot be broadcast).
+        """
         if not self.ready(now):
             raise AcommError("EvoLogics modem not ready")
         n = len(data)
@@ -170,8 +165,7 @@ class EvologicsDriver(SlotDriver):
         return self._accept(now, kind, addr, data)
 
     def ping(self, now, addr):
-        # Never raises (the link calls it without a guard): problems come
-        # back as EV_TX_FAILED for the returned handle.
+        """An acknowledged IM to addr, then AT?T: EV_RANGE from the propagation time. Never raises."""
         if not isinstance(addr, int) or not 0 <= addr <= 254 or addr == self.broadcast_addr:
             return self._refuse("cannot range to address %r" % (addr,))
         if not self.ready(now):
@@ -179,42 +173,32 @@ class EvologicsDriver(SlotDriver):
         return self._accept(now, K_PING, addr, self.ping_payload)
 
     def feed(self, now, data):
-        self._now = now
+        """Bytes read from the device."""
         self._rx_at = now
-        self._reader.feed(data)
-        self._pump(now)
+        AcousticDriver.feed(self, now, data)
 
     def poll(self, now):
-        self._now = now
-        self._begin(now)
+        """Let timers run: a line cut short by silence, deadlines, probes, retries."""
         r = self._reader
         if r.partial() and ticks_diff(now, self._rx_at) >= self.rx_gap_ms:
+            self._now = now
             r.flush()  # a line that never ended
-        if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
-            self._cmd_timed_out(now)
-        if self.slot.poll(now):
-            # it accepted a transmission and then said nothing: it may have
-            # restarted and lost its settings, so set it up again
-            self.refresh(now)
-        self._pump(now)
+        AcousticDriver.poll(self, now)
+
+    def _slot_gave_up(self, now):
+        # it accepted a transmission and then said nothing: it may have
+        # restarted and lost its settings, so set it up again
+        self.refresh(now)
 
     # -- writing commands --------------------------------------------------
     def command(self, now, what, text):
         self._out.extend(text)
         self._out.extend(self.eol)
-        self._cmd = what
-        self._cmd_deadline = ticks_add(now, self.cmd_timeout_ms)
+        self._await(now, what, self.cmd_timeout_ms)
 
-    def _pump(self, now):
-        # Starts the next command if the slot is free: configuration first,
-        # then control, the link's frame or ping, the propagation time,
-        # then probes.
-        if self._cmd:
-            return
-        if self._state != S_UP:
-            if self._state == S_CONFIG:
-                self.config.pump(now)
-            return
+    def _next_command(self, now):
+        # The command slot is free and the modem up: control, the link's
+        # frame or ping, the propagation time, then probes.
         slot = self.slot
         if self._ctrl:
             self._ctrl = False
@@ -223,30 +207,21 @@ class EvologicsDriver(SlotDriver):
         if slot.state == PTIME:
             self.command(now, C_PTIME, b"AT?T")
             return
-        if slot.state == QUEUED and (self._hold_until is None or ticks_diff(now, self._hold_until) >= 0):
-            self._hold_until = None
+        if slot.state == QUEUED and not self._held(now):
             slot.write(self._out)
             self._out.extend(self.eol)
-            self._cmd = C_SEND
-            self._cmd_deadline = ticks_add(now, self.cmd_timeout_ms)
+            self._await(now, C_SEND, self.cmd_timeout_ms)
             return
         if self._ptime:
             self._ptime = False
             self.command(now, C_PTIME, b"AT?T")
             return
-        due = self._probe
-        if not due and self.alive_period_ms and self._heard is not None:
-            due = ticks_diff(now, self._heard) >= self.alive_period_ms
-        if due:
+        if self._probe_due(now):
             # the address tells whether the modem forgot its settings
-            self._probe = False
             self.command(now, C_PROBE, b"AT?AL")
 
-    def _cmd_timed_out(self, now):
-        what = self._cmd
-        self._cmd = 0
-        self.stats["cmd_timeouts"] += 1
-        self._silent += 1
+    def _unanswered(self, now, what):
+        # the command `what` timed out
         if self._state == S_CONFIG:
             self.config.failed(now, "no reply to the modem's set-up")
             return
@@ -255,10 +230,6 @@ class EvologicsDriver(SlotDriver):
             self._uncertain(now, "no reply to %s" % KIND_NAMES[slot.kind])
         elif what == C_PTIME and slot.state == PTIME:
             slot.ranged(None, self.sound_speed)
-        if self._silent >= self.down_after:
-            self.lost(now, "modem not answering")
-        else:
-            self._probe = True
 
     def _uncertain(self, now, reason):
         # The command may have been carried out with only its answer lost:
@@ -267,21 +238,19 @@ class EvologicsDriver(SlotDriver):
         self.slot.fail(reason)
 
     # -- state changes -----------------------------------------------------
-    def configured(self, now):
-        self._silent = 0
-        self._went_up()
-
     def address_known(self, now, prev, addr):
         pass  # hook for the configuration; the address lives there
 
     def lost(self, now, reason):
-        # The modem rebooted, fell silent or the connection to it was lost
-        # (a transport may call this): whatever it was doing is gone.
+        """The modem rebooted, fell silent or the connection to it was lost (a transport may call this).
+
+        Whatever it was doing is gone (EV_TX_FAILED); it is configured again.
+        """
         self._went_down(reason)
         self._restart(now, reason)
 
     def refresh(self, now):
-        # Set the modem up again without saying it is down.
+        """Set the modem up again without saying it is down."""
         if self._state == S_UP:
             self._restart(now, None)
 
@@ -290,14 +259,10 @@ class EvologicsDriver(SlotDriver):
             self.slot.fail(reason)
         elif self.slot.state not in (IDLE, QUEUED):
             self.slot.fail("modem set up again")
-        self._hold_until = None
-        self._cmd = 0
-        self._probe = False
         self._ctrl = False
         self._ptime = False
         self._reader.reset()
-        self._state = S_CONFIG
-        self.config.start(now)
+        self._set_up_again(now)
 
     # -- lines from the modem (LineReader sink) ----------------------------
     def on_junk(self, kind):
@@ -308,9 +273,9 @@ class EvologicsDriver(SlotDriver):
         n = r.n
         if n == 0:
             return
-        for k in rx.RECV:
+        for k in w.RECV:
             if r.is_word(k):
-                rx.recv(self, now, r, k)
+                self._recv(now, r, k)
                 return
         if r.is_word(b"DELIVEREDIM") or r.is_word(b"FAILEDIM") or r.is_word(b"CANCELEDIM"):
             self._im_outcome(r)
@@ -322,28 +287,28 @@ class EvologicsDriver(SlotDriver):
             self._send_end(r)
             return
         if r.is_word(b"USBLLONG") or r.is_word(b"USBLANGLES"):
-            rx.usbl(self, r)
+            self._usbl(r)
             return
-        for k in rx.NOTES:
+        for k in w.NOTES:
             if r.is_word(k):
                 self.stats["notes"] += 1
                 return
         if r.starts(b"ERROR EFAULT") or r.starts(b"ERROR OVERLOAD"):
             self.stats["async_errors"] += 1  # not replies (evins treats them so)
             return
-        kind = self.R_VALUE
+        kind = R_VALUE
         if r.is_word(b"OK") or r.is_word(b"[*]OK"):
-            kind = self.R_OK
+            kind = R_OK
         elif r.starts(b"ERROR"):
-            kind = self.R_ERROR
+            kind = R_ERROR
         elif r.starts(b"BUSY"):
-            kind = self.R_BUSY
+            kind = R_BUSY
         if self._cmd:
             self._reply(now, r, kind)
-        elif kind == self.R_VALUE and self._boot_text(r):
+        elif kind == R_VALUE and self._boot_text(r):
             self.stats["reboots"] += 1
             self.lost(now, "modem rebooted")
-        elif kind == self.R_VALUE:
+        elif kind == R_VALUE:
             self.stats["unknown"] += 1
         else:
             self.stats["stale"] += 1
@@ -358,11 +323,10 @@ class EvologicsDriver(SlotDriver):
     def _reply(self, now, r, kind):
         what = self._cmd
         self._cmd = 0
-        self._heard = now
-        self._silent = 0
-        if kind == self.R_ERROR and r.starts(b"ERROR NO CONTROL") and self.config.take_control:
+        self._heard_from(now)
+        if kind == R_ERROR and r.starts(b"ERROR NO CONTROL") and self.config.take_control:
             self._ctrl = True  # another client took the modem: take it back
-        if kind == self.R_VALUE and self._boot_text(r):
+        if kind == R_VALUE and self._boot_text(r):
             # power-up text where a reply was due
             self.stats["reboots"] += 1
             self.lost(now, "modem rebooted")
@@ -374,17 +338,17 @@ class EvologicsDriver(SlotDriver):
         if what == C_SEND:
             if slot.state != CMD:
                 self.stats["stale"] += 1
-            elif kind == self.R_OK:
+            elif kind == R_OK:
                 slot.accepted(now)
-            elif kind == self.R_ERROR or kind == self.R_BUSY:
-                if kind == self.R_BUSY:
+            elif kind == R_ERROR or kind == R_BUSY:
+                if kind == R_BUSY:
                     self._hold_until = ticks_add(now, self.busy_backoff_ms)
-                slot.refused(rx.text(r))
+                slot.refused(r.shown())
             else:
                 self.stats["malformed"] += 1
                 self._uncertain(now, "garbled reply to %s" % KIND_NAMES[slot.kind])
         elif what == C_PTIME:
-            us = r.int_field(0) if kind == self.R_VALUE and r.nc == 0 else None
+            us = r.int_field(0) if kind == R_VALUE and r.nc == 0 else None
             if us is not None and us < 0:
                 us = None
             if us is not None:
@@ -392,7 +356,7 @@ class EvologicsDriver(SlotDriver):
             if slot.state == PTIME:
                 slot.ranged(us, self.sound_speed)
         elif what == C_PROBE:
-            a = r.int_field(0) if kind == self.R_VALUE and r.nc == 0 else None
+            a = r.int_field(0) if kind == R_VALUE and r.nc == 0 else None
             own = self.config.own_addr
             if a is not None and own is not None and a != own:
                 # a restart put back the address saved in the modem
@@ -400,6 +364,58 @@ class EvologicsDriver(SlotDriver):
                 self.lost(now, "modem rebooted")
 
     # -- notifications -------------------------------------------------------
+    def _recv(self, now, r, k):
+        # RECVIM (in both firmware layouts), RECV, RECVIMS, RECVPBM: EV_RX
+        data = r.data()
+        li = 1
+        f1 = r.field(1)
+        if f1 and f1[0] == 112:  # p<pid>
+            li = 2
+        src = r.int_field(li + 1)
+        dst = r.int_field(li + 2)
+        if data is None or src is None or dst is None or not 0 <= src <= 255 or not 0 <= dst <= 255:
+            self.stats["malformed"] += 1
+            return
+        if k == b"RECVIM":
+            flag = r.field(li + 3)
+            base = li + 4
+            if self._reader.specs is w.RX_SPECS_16:
+                rssi, integ, vel = r.int_field(base + 1), r.int_field(base + 2), r.float_field(base + 4)
+            else:
+                rssi, integ, vel = r.int_field(base + 1), r.int_field(base + 2), r.float_field(base + 3)
+            own = self.config.own_addr
+            if flag == b"ack" and own is not None and dst == own:
+                # our modem acknowledges by itself: it is busy meanwhile
+                self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
+        elif k == b"RECV":
+            rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 7)
+        elif k == b"RECVIMS":
+            rssi, integ, vel = r.int_field(li + 5), r.int_field(li + 6), r.float_field(li + 7)
+        else:
+            rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 6)
+        self.last_rx = {"src": src, "rssi": rssi, "integrity": integ, "velocity": vel}
+        self._events.append((EV_RX, src, dst, data))
+
+    def _usbl(self, r):
+        # USBLLONG / USBLANGLES (units as the modem gives them, unconfirmed)
+        long = r.is_word(b"USBLLONG")
+        names = w.USBL_LONG if long else w.USBL_ANGLES
+        if r.nc != len(names):
+            self.stats["malformed"] += 1
+            return
+        fix = {}
+        for i in range(len(names)):
+            v = r.float_field(i + 1)
+            if v is None:
+                self.stats["malformed"] += 1
+                return
+            fix[names[i]] = v
+        fix["addr"] = int(fix["addr"])
+        if long:
+            self.last_fix = fix
+        else:
+            self.last_angles = fix
+
     def _im_outcome(self, r):
         dst = r.int_field(1)
         slot = self.slot
@@ -411,7 +427,7 @@ class EvologicsDriver(SlotDriver):
                 self._ptime = True
             slot.delivered()
         else:
-            slot.undelivered(rx.text(r).split(",")[0])
+            slot.undelivered(r.shown().split(",")[0])
 
     def _burst_outcome(self, r):
         dst = r.int_field(2)

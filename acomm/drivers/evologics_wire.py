@@ -36,6 +36,36 @@ JUNK_LENGTH = const(2)  # no terminator where the declared length ends
 JUNK_BAD_LEN = const(3)  # a payload length that is not a number or too big
 JUNK_CUT = const(4)  # the line stopped (silence) before it was complete
 
+# notifications: keywords that are never a reply
+NOTES = (
+    b"RECVSTART",
+    b"RECVEND",
+    b"RECVFAILED",
+    b"RECVSRV",
+    b"BITRATE",
+    b"SRCLEVEL",
+    b"PHYON",
+    b"PHYOFF",
+    b"STATUS",
+    b"RADDR",
+    b"DROPCNT",
+    b"ECLK",
+    b"RTO",
+    b"USBLPHYD",
+    b"USBLPHYP",
+    b"EXPIREDIMS",
+    b"CANCELEDIMS",
+    b"CANCELEDPBM",
+    b"SENDSTART",
+)
+# receptions (the driver turns them into EV_RX events)
+RECV = (b"RECVIM", b"RECV", b"RECVIMS", b"RECVPBM")
+# the fields of the USBL fixes (units as the modem gives them, unconfirmed)
+USBL_LONG = ("ctime", "mtime", "addr", "x", "y", "z", "east", "north", "up", "roll", "pitch", "yaw", "ptime", "rssi",
+             "integrity", "accuracy")
+USBL_ANGLES = ("ctime", "mtime", "addr", "lbearing", "lelevation", "bearing", "elevation", "roll", "pitch", "yaw",
+               "rssi", "integrity", "accuracy")
+
 
 class LineReader:
     # Cuts bytes into lines and hands each to sink.on_line(reader); the
@@ -264,6 +294,14 @@ class LineReader:
 
     def text(self):
         return bytes(memoryview(self.buf)[: self.n])
+
+    def shown(self):
+        # the line as a str for messages (repr when it is not text)
+        t = self.text()
+        try:
+            return t.decode()
+        except Exception:  # noqa: BLE001 - binary junk in a reply
+            return repr(t)
 
 
 def parse_int(b, s, e):

@@ -34,7 +34,7 @@ from ..errors import AcommError, DecodeError, EncodeError
 from . import iridium_wire as w
 from .atcommand import R_END, R_OK, R_TIMEOUT
 from .atdriver import AtDriver
-from .slotbase import IDLE, QUEUED
+from .base import IDLE, QUEUED
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -42,7 +42,7 @@ _EV_RX = const(1)
 _EV_TX_DONE = const(2)
 _EV_TX_FAILED = const(4)
 
-# slot states after slotbase's IDLE and QUEUED
+# slot states after base's IDLE and QUEUED
 WRITING = const(2)
 LOADED = const(3)
 SESSION = const(4)
@@ -58,6 +58,12 @@ _CLEAR_TRIES = const(3)
 
 
 class IridiumDriver(AtDriver):
+    """An Iridium 9602/9603 SBD transceiver: one MO message per session to the gateway (addr is ignored).
+
+    EV_TX_DONE means handed to the gateway, never delivered. Raises
+    AcommError when not ready, EncodeError for a bad size.
+    """
+
     def __init__(
         self,
         address=None,

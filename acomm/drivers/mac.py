@@ -107,7 +107,8 @@ class Aloha:
 
 
 class MacDriver:
-    # Same interface as the driver it wraps; only ready() is gated.
+    """The driver interface of the driver it wraps, with ready() gated by a medium access rule."""
+
     def __init__(self, driver, mac):
         self.driver = driver
         self.mac = mac

@@ -8,22 +8,30 @@
 #                      modem_wait_ms up to `retries` times, then the modem
 #                      counts as lost (EV_DRIVER_DOWN, start-up again);
 #   the acoustic slot  one data frame, mini-packet or ping from the moment
-#                      the link hands it over until its end (micromodem_slot).
+#                      the link hands it over until its end (micromodem_sequences).
 # Received frames, mini-packets and reboots arrive at any time in between.
 
 from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
-from ..compat import ticks_add, ticks_diff
+from ..compat import ticks_add
 from ..errors import AcommError, EncodeError
 from ..events import EV_RX
-from . import micromodem_nmea as nm
-from .micromodem_air import BITRATE, FRAME_BYTES, Airtime, check_rate
-from .micromodem_config import MicroModemConfig
-from .micromodem_mini import advert_to_mini, mini_to_advert
-from .micromodem_slot import ECHO, K_DATA, K_MINI, K_PING, AcousticSlot
-from .slotbase import S_CONFIG, SlotDriver
+from . import micromodem_wire as w
+from .micromodem_sequences import ECHO, K_DATA, K_MINI, K_PING, AcousticSlot, MicroModemConfig
+from .micromodem_wire import BITRATE, FRAME_BYTES, Airtime, advert_to_mini, check_rate, mini_to_advert
+from .base import S_CONFIG, AcousticDriver
 
 
-class MicroModemDriver(SlotDriver):
+class MicroModemDriver(AcousticDriver):
+    """A WHOI Micro-Modem: one frame per cycle (acknowledged or not), adverts as mini-packets, pings.
+
+    Addresses are 0..max_addr (broadcast_addr is everyone); frames are 1 to
+    the rate's frame size. Raises AcommError for settings out of range.
+    """
+
+    # a command is resent `retries` times before it counts as unanswered,
+    # so the first unanswered one already says the modem is gone
+    down_after = 1
+
     def __init__(
         self,
         address=None,
@@ -45,9 +53,9 @@ class MicroModemDriver(SlotDriver):
         retry_ms=2000,
         query_src=None,
         clock=None,
-        csum32=nm.CSUM32_VERIFY,
+        csum32=w.CSUM32_VERIFY,
     ):
-        SlotDriver.__init__(self)
+        AcousticDriver.__init__(self)
         check_rate(rate)
         if not 0 <= max_addr <= 254 or not 0 <= broadcast_addr <= max_addr:
             raise AcommError("Micro-Modem addresses: broadcast %r outside 0..%r" % (broadcast_addr, max_addr))
@@ -80,7 +88,7 @@ class MicroModemDriver(SlotDriver):
         self.config = MicroModemConfig(self, address, query_src, clock, retry_ms)
         self.stats = {
             "reboots": 0,
-            "timeouts": 0,  # $CC sentences resent
+            "cmd_timeouts": 0,  # $CC sentences that went unanswered in time (resent or given up)
             "errors": 0,  # $CAERR lines
             "stale": 0,  # echoes and requests that match nothing we wait for
             "malformed": 0,
@@ -90,11 +98,8 @@ class MicroModemDriver(SlotDriver):
             "mini_ignored": 0,  # mini-packets that are not acomm adverts
             "pinged": 0,  # $CAMPA: the modem answered someone's ping
         }
-        self._rd = nm.LineReader(self, csum32=csum32)
-        self._now = 0
-        self._cmd = None  # the echo awaited, e.g. b"CACYC"
-        self._cmd_line = b""
-        self._cmd_deadline = 0
+        self._reader = w.LineReader(self, csum32=csum32)
+        self._cmd_line = b""  # the sentence in the command slot (which awaits its echo, e.g. b"CACYC")
         self._cmd_tries = 0
         self.slot = AcousticSlot(self)
 
@@ -118,9 +123,14 @@ class MicroModemDriver(SlotDriver):
 
     @property
     def junk(self):
-        return self._rd.junk
+        return self._reader.junk
 
     def send(self, now, addr, data, ack=False):
+        """One frame in a cycle to addr (ack: $CAACK gives EV_DELIVERED); a plain advert goes as a mini-packet.
+
+        Raises AcommError when not ready, EncodeError for a bad size or
+        address.
+        """
         if not self.ready(now):
             raise AcommError("Micro-Modem not ready")
         n = len(data)
@@ -141,7 +151,7 @@ class MicroModemDriver(SlotDriver):
         return h
 
     def ping(self, now, addr):
-        # Never raises: problems come back as EV_TX_FAILED for the handle.
+        """$CCMPC to addr: EV_RANGE from the travel time (metres None without a reply). Never raises."""
         if not isinstance(addr, int) or not 0 <= addr <= self.max_addr or addr in (self.broadcast_addr, self.own_addr):
             return self._refuse("cannot ping address %r" % (addr,))
         if not self.ready(now):
@@ -150,64 +160,46 @@ class MicroModemDriver(SlotDriver):
         self.slot.start(now, h, K_PING, addr)
         return h
 
-    def feed(self, now, data):
-        self._now = now
-        self._rd.feed(data)
-        self._pump(now)
-
-    def poll(self, now):
-        self._now = now
-        self._begin(now)
-        if self._cmd is not None and ticks_diff(now, self._cmd_deadline) >= 0:
-            self._cmd_timed_out(now)
-        self.slot.poll(now)
-        self._pump(now)
-
     # -- the command slot ----------------------------------------------------------
     def write(self, line):
         self._out.extend(line)
 
     def command(self, now, line, expect):
+        # writes the sentence line; the slot waits for the echo `expect`
         self._out.extend(line)
-        self._cmd = expect
         self._cmd_line = line
         self._cmd_tries = 0
-        self._cmd_deadline = ticks_add(now, self.modem_wait_ms)
+        self._await(now, expect, self.modem_wait_ms)
 
     def cancel_command(self):
-        self._cmd = None
+        self._cmd = 0
 
     def _cmd_timed_out(self, now):
-        self.stats["timeouts"] += 1
+        # resent up to `retries` times before it counts as unanswered
         if self._cmd_tries < self.retries:
             self._cmd_tries += 1
+            self.stats["cmd_timeouts"] += 1
             self._out.extend(self._cmd_line)
             self._cmd_deadline = ticks_add(now, self.modem_wait_ms)
             return
-        line = self._cmd_line
-        self._cmd = None
-        what = "no answer to $%s" % line[1:6].decode()
-        if self._state == S_CONFIG:
-            self.config.failed(now, what)
-            return
-        self.slot.fail(what)
-        self.lost(now, "modem not answering")
+        AcousticDriver._cmd_timed_out(self, now)
 
-    def _pump(self, now):
-        if self._state == S_CONFIG and self._cmd is None:
-            self.config.pump(now)
+    def _unanswered(self, now, what):
+        why = "no answer to $%s" % self._cmd_line[1:6].decode()
+        if self._state == S_CONFIG:
+            self.config.failed(now, why)
+        else:
+            self.slot.fail(why)
+
+    def _next_command(self, now):
+        pass  # the acoustic slot writes its sentences itself
 
     # -- state changes -------------------------------------------------------------
-    def configured(self, now):
-        self._went_up()
-
     def lost(self, now, reason, wait_ms=0):
-        # The modem rebooted or fell silent: whatever it was doing is gone.
+        """The modem rebooted or fell silent: whatever it was doing is gone; configure it again after wait_ms."""
         self._went_down(reason)
         self.slot.fail(reason)
-        self._cmd = None
-        self._state = S_CONFIG
-        self.config.start(now, wait_ms)
+        self._set_up_again(now, wait_ms)
 
     # -- sentences from the modem (LineReader sink) ----------------------------------
     def on_junk(self, kind):
@@ -215,17 +207,17 @@ class MicroModemDriver(SlotDriver):
 
     def on_sentence(self, buf, n):
         now = self._now
-        f = nm.fields(buf, n)
+        f = w.fields(buf, n)
         name = f[0]
-        if self._cmd is not None and name == self._cmd:
+        if self._cmd and name == self._cmd:
             if self._state == S_CONFIG:
                 if self.config.answer(now, f):
-                    self._cmd = None
+                    self._cmd = 0
                 else:
                     self.stats["stale"] += 1
                 return
             if self.slot.state in ECHO and ECHO[self.slot.state] == name and self._echo_matches(f):
-                self._cmd = None
+                self._cmd = 0
                 self.slot.echoed(now, name)
                 return
         handler = _HANDLERS.get(name)
@@ -238,7 +230,7 @@ class MicroModemDriver(SlotDriver):
         # $CACYC,0,src,dst,...: field 3 is the destination; $CAMUC/$CAMPC:
         # src,dst,... with the destination in field 2
         i = 3 if f[0] == b"CACYC" else 2
-        return len(f) > i and nm.num(f[i]) == self.slot.addr
+        return len(f) > i and w.num(f[i]) == self.slot.addr
 
     def _rev(self, now, f):
         # $CAREV,HHMMSS,IDENT,VERSION: INIT means the modem has just restarted
@@ -249,16 +241,16 @@ class MicroModemDriver(SlotDriver):
             self.stats["reboots"] += 1
             self.lost(now, "modem rebooted", self.reboot_wait_ms)
         elif len(f) >= 4:
-            self.info[nm.text(f[2])] = nm.text(f[3])
+            self.info[w.text(f[2])] = w.text(f[3])
 
     def _err(self, now, f):
         # $CAERR,HHMMSS,MODULE,NUM,MESSAGE
         self.stats["errors"] += 1
-        module = nm.text(f[2]) if len(f) > 2 else "?"
-        msg = nm.text(f[4]) if len(f) > 4 else ""
+        module = w.text(f[2]) if len(f) > 2 else "?"
+        msg = w.text(f[4]) if len(f) > 4 else ""
         reason = "modem error %s: %s" % (module, msg) if msg else "modem error %s" % module
-        if self._state == S_CONFIG and self._cmd is not None:
-            self._cmd = None
+        if self._state == S_CONFIG and self._cmd:
+            self._cmd = 0
             self.config.failed(now, reason)
         elif self.slot.error(reason):
             pass
@@ -268,7 +260,7 @@ class MicroModemDriver(SlotDriver):
         if len(f) < 7:
             self.stats["malformed"] += 1
             return
-        if not self.slot.data_request(now, nm.num(f[3]), nm.num(f[5], 0, 4096)):
+        if not self.slot.data_request(now, w.num(f[3]), w.num(f[5], 0, 4096)):
             # not for a cycle of ours (one we gave up on): the modem will
             # report DATA_TIMEOUT and go back to idle by itself
             self.stats["stale"] += 1
@@ -279,10 +271,10 @@ class MicroModemDriver(SlotDriver):
 
     def _ack(self, now, f):
         # $CAACK,SRC,DEST,FRAME#,1
-        if len(f) < 4 or nm.num(f[1]) is None or nm.num(f[2]) is None:
+        if len(f) < 4 or w.num(f[1]) is None or w.num(f[2]) is None:
             self.stats["malformed"] += 1
             return
-        if not self.slot.acked(now, nm.num(f[1]), nm.num(f[2]), nm.num(f[3])):
+        if not self.slot.acked(now, w.num(f[1]), w.num(f[2]), w.num(f[3])):
             self.stats["stale"] += 1
 
     def _rxd(self, now, f):
@@ -290,9 +282,9 @@ class MicroModemDriver(SlotDriver):
         if len(f) < 6:
             self.stats["malformed"] += 1
             return
-        src = nm.num(f[1], 0, 254)
-        dst = nm.num(f[2], 0, 254)
-        data = nm.unhex(f[5])
+        src = w.num(f[1], 0, 254)
+        dst = w.num(f[2], 0, 254)
+        data = w.unhex(f[5])
         if src is None or dst is None or not data:
             self.stats["malformed"] += 1
             return
@@ -303,9 +295,9 @@ class MicroModemDriver(SlotDriver):
         if len(f) < 4:
             self.stats["malformed"] += 1
             return
-        src = nm.num(f[1], 0, 254)
-        dst = nm.num(f[2], 0, 254)
-        value = nm.unhex(f[3]) if len(f[3]) == 4 else None
+        src = w.num(f[1], 0, 254)
+        dst = w.num(f[2], 0, 254)
+        value = w.unhex(f[3]) if len(f[3]) == 4 else None
         if src is None or dst is None or value is None:
             self.stats["malformed"] += 1
             return
@@ -317,8 +309,8 @@ class MicroModemDriver(SlotDriver):
 
     def _mpr(self, now, f):
         # $CAMPR,REMOTE,US,TRAVEL: one-way travel time in seconds
-        remote = nm.num(f[1], 0, 254) if len(f) >= 4 else None
-        travel = nm.real(f[3]) if len(f) >= 4 else None
+        remote = w.num(f[1], 0, 254) if len(f) >= 4 else None
+        travel = w.real(f[3]) if len(f) >= 4 else None
         if remote is None or travel is None or travel < 0:
             self.stats["malformed"] += 1
             return

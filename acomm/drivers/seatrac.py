@@ -20,9 +20,8 @@ from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capa
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
 from . import seatrac_wire as w
-from .seatrac_config import SeatracConfig
-from .seatrac_slot import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot
-from .slotbase import S_CONFIG, S_UP, SlotDriver
+from .seatrac_sequences import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot, SeatracConfig
+from .base import S_CONFIG, S_UP, AcousticDriver
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -43,7 +42,13 @@ _COMMANDS = (
 )
 
 
-class SeatracDriver(SlotDriver):
+class SeatracDriver(AcousticDriver):
+    """A SeaTrac beacon: DAT_SEND frames (acknowledged with MSG_REQU), PING_SEND ranging, USBL fixes.
+
+    Addresses are beacon ids 1..15 (15 also broadcasts); frames are 1..mtu
+    bytes. Raises AcommError for settings out of range.
+    """
+
     def __init__(
         self,
         beacon_id=None,
@@ -69,7 +74,7 @@ class SeatracDriver(SlotDriver):
         reboot_wait_ms=2000,
         down_after=3,
     ):
-        SlotDriver.__init__(self)
+        AcousticDriver.__init__(self)
         if not 1 <= mtu <= 31:
             raise AcommError("SeaTrac DAT payloads are 1..31 bytes, not %d" % mtu)
         if beacon_id is not None and not 1 <= beacon_id <= 15:
@@ -112,24 +117,15 @@ class SeatracDriver(SlotDriver):
         self.stats = {
             "cmd_timeouts": 0,
             "reboots": 0,
-            "stale": 0,  # responses to commands we no longer wait for
-            "stray": 0,  # acks and errors that match nothing in flight
+            "stale": 0,  # answers, acks and errors that match nothing we wait for
             "malformed": 0,
-            "unknown_cid": 0,
+            "unknown": 0,  # messages with a CID we do not know
             "statuses": 0,
             "queue_refused": 0,
         }
-        self._dec = w.LineDecoder(w.SYNC_RSP, self)
+        self._reader = w.LineReader(w.SYNC_RSP, self)
         self._msg = bytearray(w.MAX_MSG)
         self._line = bytearray(2 * w.MAX_MSG + 8)
-        self._now = 0
-        self._cmd = 0  # CID awaiting its response, 0 for none
-        self._cmd_deadline = 0
-        self._silent = 0  # commands timed out in a row
-        self._heard = None  # when the beacon last said anything valid
-        self._probe = False
-        self._probe_after = None
-        self._hold_until = None  # no acoustic command before this
         self._up_s = None  # beacon uptime (s) at self._up_at
         self._up_at = 0
         self.slot = AcousticSlot(self)
@@ -149,6 +145,10 @@ class SeatracDriver(SlotDriver):
         return self.config.own_id
 
     def send(self, now, addr, data, ack=False):
+        """One DAT_SEND to beacon addr (15: everyone, one-way); ack asks for the remote's automatic reply.
+
+        Raises AcommError when not ready, EncodeError for a bad size or id.
+        """
         if not self.ready(now):
             raise AcommError("SeaTrac not ready")
         n = len(data)
@@ -163,8 +163,7 @@ class SeatracDriver(SlotDriver):
         return self._accept(now, K_DAT, addr, mtype, data)
 
     def ping(self, now, addr):
-        # Never raises (the link calls it without a guard): problems come
-        # back as EV_TX_FAILED for the returned handle.
+        """A PING_SEND to beacon addr: EV_RANGE with the USBL fix. Never raises (the link calls it unguarded)."""
         if not isinstance(addr, int) or not 1 <= addr <= 15:
             return self._refuse("cannot ping beacon id %r" % (addr,))
         if not self.ready(now):
@@ -183,23 +182,12 @@ class SeatracDriver(SlotDriver):
         self._q_dirty = True
         self._pump(now)
 
-    def feed(self, now, data):
-        self._now = now
-        self._dec.feed(data)
-        self._pump(now)
-
-    def poll(self, now):
-        self._now = now
-        self._begin(now)
-        if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
-            self._cmd_timed_out(now)
-        if self.slot.poll(now):
-            self._probe = True  # silent: did it restart?
-        self._pump(now)
+    def _slot_gave_up(self, now):
+        self._probe = True  # silent: did it restart?
 
     @property
     def junk(self):
-        return self._dec.junk
+        return self._reader.junk
 
     # -- writing commands --------------------------------------------------
     def command(self, now, cid, n):
@@ -207,18 +195,11 @@ class SeatracDriver(SlotDriver):
         self._msg[0] = cid
         k = w.encode_into(self._line, w.SYNC_CMD, self._msg, n)
         self._out.extend(memoryview(self._line)[:k])
-        self._cmd = cid
-        self._cmd_deadline = ticks_add(now, self.cmd_timeout_ms)
+        self._await(now, cid, self.cmd_timeout_ms)
 
-    def _pump(self, now):
-        # Starts the next command if the slot is free: configuration first,
-        # then the link's frame, then probes.
-        if self._cmd:
-            return
-        if self._state != S_UP:
-            if self._state == S_CONFIG:
-                self.config.pump(now)
-            return
+    def _next_command(self, now):
+        # The command slot is free and the beacon up: the reply packet
+        # first, then the link's frame, then probes.
         if self._q_dirty:
             self._q_dirty = False
             self._q_sent = q = self._q_want
@@ -231,24 +212,15 @@ class SeatracDriver(SlotDriver):
                 m[3 : 3 + len(q[1])] = q[1]
                 self.command(now, w.CID_DAT_QUEUE_SET, 3 + len(q[1]))
             return
-        if self.slot.state == QUEUED and (self._hold_until is None or ticks_diff(now, self._hold_until) >= 0):
-            self._hold_until = None
+        if self.slot.state == QUEUED and not self._held(now):
             cid, n = self.slot.build(self._msg)
             self.command(now, cid, n)
             return
-        due = self._probe and (self._probe_after is None or ticks_diff(now, self._probe_after) >= 0)
-        if not due and self.alive_period_ms and self._heard is not None:
-            due = ticks_diff(now, self._heard) >= self.alive_period_ms
-        if due:
-            self._probe = False
-            self._probe_after = ticks_add(now, self.probe_gap_ms)
+        if self._probe_due(now):
             self.command(now, w.CID_SYS_ALIVE, 1)
 
-    def _cmd_timed_out(self, now):
-        cid = self._cmd
-        self._cmd = 0
-        self.stats["cmd_timeouts"] += 1
-        self._silent += 1
+    def _unanswered(self, now, cid):
+        # the command cid timed out
         if cid == w.CID_DAT_QUEUE_SET or cid == w.CID_DAT_QUEUE_CLR:
             self._q_dirty = True  # write it again once the beacon answers
         if self._state == S_CONFIG:
@@ -260,29 +232,16 @@ class SeatracDriver(SlotDriver):
             # lost: hold the next one until the beacon would be idle again.
             self._hold_until = ticks_add(now, slot.busy_ms())
             slot.fail("no response to %s" % ("PING_SEND" if slot.kind == K_PING else "DAT_SEND"))
-        if self._silent >= self.down_after:
-            self.lost(now, "modem not answering")
-        else:
-            self._probe = True
 
     # -- state changes -----------------------------------------------------
-    def configured(self, now):
-        # called by the configuration sequence when it is done
-        self._silent = 0
-        self._went_up()
-
     def lost(self, now, reason):
-        # The beacon rebooted or fell silent: whatever it was doing is gone.
+        """The beacon rebooted or fell silent: whatever it was doing is gone; configure it again."""
         self._went_down(reason)
         if self.slot.state != IDLE:
             self.slot.fail(reason)
-        self._hold_until = None
-        self._cmd = 0
-        self._probe = False
         self.queued_reply = None  # the beacon's RAM is gone: queue it again
         self._q_dirty = self._q_want is not None and self._q_want[1] is not None
-        self._state = S_CONFIG
-        self.config.start(now)
+        self._set_up_again(now)
 
     def uptime(self, now, secs, expected_reboot=False):
         # Seconds since power-up reported by the beacon. Fewer than the last
@@ -303,7 +262,7 @@ class SeatracDriver(SlotDriver):
     def forget_uptime(self):
         self._up_s = None
 
-    # -- messages from the beacon (LineDecoder sink) -------------------------
+    # -- messages from the beacon (LineReader sink) -------------------------
     def on_junk(self, kind):
         # Text outside messages is what a rebooting beacon prints: ask it
         # how long it has been up. Damaged lines are only counted.
@@ -313,8 +272,7 @@ class SeatracDriver(SlotDriver):
     def on_message(self, b, n):
         now = self._now
         cid = b[0]
-        self._heard = now
-        self._silent = 0
+        self._heard_from(now)
         if cid == self._cmd:
             self._cmd = 0
             if self._state == S_CONFIG:
@@ -346,7 +304,7 @@ class SeatracDriver(SlotDriver):
                 else:
                     self.slot.dat_error(b[1])
             else:
-                self.stats["stray"] += 1
+                self.stats["stale"] += 1
         elif cid == w.CID_PING_RESP:
             self._ping_resp(b, n)
         elif cid == w.CID_PING_REQ:
@@ -364,7 +322,7 @@ class SeatracDriver(SlotDriver):
         elif cid in _COMMANDS:
             self.stats["stale"] += 1
         else:
-            self.stats["unknown_cid"] += 1
+            self.stats["unknown"] += 1
 
     def _answering(self, now):
         # Our beacon heard a request for it and replies by itself; it would
@@ -392,7 +350,7 @@ class SeatracDriver(SlotDriver):
                     self.last_fix = w.fix_dict(b, 1)
                 self.slot.delivered()
             else:
-                self.stats["stray"] += 1
+                self.stats["stale"] += 1
             if not plen:
                 return
         if src == 0 or src > 15:  # 0 is "unknown" as a source
@@ -413,7 +371,7 @@ class SeatracDriver(SlotDriver):
             return
         src = b[2]
         if not self.slot.awaiting(K_PING, src):
-            self.stats["stray"] += 1
+            self.stats["stale"] += 1
             return
         fix = w.fix_dict(b, 1)
         metres = fix.get("range")

@@ -12,7 +12,7 @@
 from ..compat import const
 from ..codec.crc import crc16
 from ..errors import EncodeError
-from .lineframe import SyncLines
+from .base import SyncLines
 
 SYNC_CMD = const(0x23)  # '#'
 SYNC_RSP = const(0x24)  # '$'
@@ -156,7 +156,7 @@ def encode(sync, cid, payload=b""):
     return bytes(memoryview(out)[: encode_into(out, sync, msg, len(msg))])
 
 
-# Kinds of damaged input a LineDecoder reports to its sink's on_junk().
+# Kinds of damaged input a LineReader reports to its sink's on_junk().
 JUNK_TEXT = const(1)  # a line without the sync character (noise, boot text)
 JUNK_TRUNCATED = const(2)  # a new sync arrived before the line ended
 JUNK_OVERLONG = const(3)
@@ -165,9 +165,9 @@ JUNK_CRC = const(5)
 JUNK_SHORT = const(6)  # fewer than CID + CRC
 
 
-class LineDecoder(SyncLines):
+class LineReader(SyncLines):
     # Cuts the byte stream into messages that start with `sync` (the
-    # framing is lineframe's). Accepts CR, LF or both as the end of a line.
+    # framing is base.SyncLines). Accepts CR, LF or both as the end of a line.
     # Good messages go to sink.on_message(buf, n) with buf[0] the CID and n
     # counting CID + payload; everything else is dropped, counted and
     # reported to sink.on_junk(kind). Two preallocated buffers; no allocation per byte.

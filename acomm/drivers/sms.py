@@ -29,7 +29,7 @@ from . import sms_pdu as pdu
 from . import sms_wire as w
 from .atcommand import R_OK, R_TIMEOUT
 from .atdriver import AtDriver
-from .slotbase import IDLE, QUEUED
+from .base import IDLE, QUEUED
 
 SENDING = const(2)
 K_SMS = const(0)
@@ -43,6 +43,13 @@ _TRIES = const(2)  # reads and deletes that time out are tried this often
 
 
 class SmsDriver(AtDriver):
+    """A GSM modem sending one SMS per frame to a peer's number (node id -> number table); no broadcast.
+
+    EV_TX_DONE means the network took it (+CMGS). Raises AcommError when
+    not ready, EncodeError for a broadcast, an address without a number or
+    a bad size.
+    """
+
     def __init__(
         self,
         address=None,

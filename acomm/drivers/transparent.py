@@ -19,6 +19,11 @@ _OUT_CAP = const(1024)
 
 
 class TransparentDriver(SansIO):
+    """A transparent byte pipe: SLIP-delimited frames, no addressing of its own.
+
+    EV_TX_DONE when the bytes have left (by the line's or the modem's timing model).
+    """
+
     def __init__(self, baud=9600, mtu=255, turnaround_ms=0, model="transparent serial", air_bitrate=None, air_overhead=0):
         SansIO.__init__(self)
         self.baud = baud

@@ -8,7 +8,7 @@ from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING
 from acomm.compat import TICKS_MAX
 from acomm.drivers import benthos_wire as w
 from acomm.drivers.benthos import BenthosDriver
-from acomm.drivers.benthos_lines import LineSplitter, RxBlock
+from acomm.drivers.benthos_wire import LineReader, RxBlock
 from acomm.errors import AcommError, EncodeError
 from acomm.events import (
     DELIVERED,
@@ -104,7 +104,7 @@ class Sink:
 
 def test_line_splitter_takes_every_ending_and_the_bare_prompt():
     s = Sink()
-    sp = LineSplitter(32, s)
+    sp = LineReader(32, s)
     sp.feed(b"OK\r\nA\rB\nC\n\rD\r\n\r\nuser:1>AT\r\nxx\x00user:12>")
     assert s.lines == [
         (b"OK", False),
@@ -683,7 +683,7 @@ WORDS = (
 
 
 def plausible(rng, d):
-    from acomm.drivers import benthos_answers as b
+    from acomm.drivers import benthos_sequences as b
 
     k = d._cmd
     if k and rng.chance(0.5 if d.ready(d._now) else 0.9):

@@ -4,10 +4,9 @@
 # lines to emulated modems on one acoustic medium, through every fault mode.
 from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
 from acomm.compat import TICKS_MAX
-from acomm.drivers import micromodem_nmea as nm
+from acomm.drivers import micromodem_wire as nm
 from acomm.drivers.micromodem import MicroModemDriver
-from acomm.drivers.micromodem_air import Airtime
-from acomm.drivers.micromodem_mini import advert_to_mini, mini_to_advert
+from acomm.drivers.micromodem_wire import Airtime, advert_to_mini, mini_to_advert
 from acomm.errors import AcommError, EncodeError
 from acomm.events import (
     AVAILABLE,

@@ -5,7 +5,7 @@
 # (pyacomms' WaitingForCiTxf state) waits for that $CATXF and would never
 # send $CCTXD without it. Also: $CAACK only when the sender asked
 # for an acknowledgement. Emulator and driver, both runtimes.
-from acomm.drivers import micromodem_nmea as nm
+from acomm.drivers import micromodem_wire as nm
 from acomm.drivers.micromodem import MicroModemDriver
 from acomm.events import EV_DRIVER_UP, EV_RX, EV_TX_DONE
 from acomm_sim.medium import Medium

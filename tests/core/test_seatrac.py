@@ -69,7 +69,7 @@ class Sink:
 
 def test_line_decoder_takes_every_terminator_and_drops_damage():
     s = Sink()
-    dec = w.LineDecoder(w.SYNC_RSP, s)
+    dec = w.LineReader(w.SYNC_RSP, s)
     good = (PING_STATUS, DAT_ERROR.replace(b"\r\n", b"\n"), PING_ERROR.replace(b"\r\n", b"\r"), b"$4000028015\n\r")
     dec.feed(b"".join(good))
     assert s.msgs == [b"\x40\x00\x02", b"\x63\x34\x02", b"\x43\x34\x02", b"\x40\x00\x02"]
@@ -546,7 +546,7 @@ def test_emulator_settings_and_transceiver_state():
     e.feed(0, w.encode(w.SYNC_CMD, w.CID_SETTINGS_GET))
     line = e.take_output()
     s = Sink()
-    w.LineDecoder(w.SYNC_RSP, s).feed(line)
+    w.LineReader(w.SYNC_RSP, s).feed(line)
     rec = bytearray(s.msgs[0][1:])
     assert len(rec) == 110 and rec[96] == 4
     rec[96] = 9

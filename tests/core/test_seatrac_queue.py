@@ -7,13 +7,13 @@ from binascii import unhexlify
 
 from acomm.drivers import seatrac_wire as w
 from acomm.errors import AcommError, EncodeError
-from acomm.events import DELIVERED, EV_RECEIVED, EV_STATUS
+from acomm.events import DELIVERED, EV_DRIVER_UP, EV_RECEIVED, EV_REPLIED, EV_STATUS
 from acomm_sim.medium import Medium
 from acomm_sim.seatrac import SeatracEmulator
 from acomm_sim.world import World
 from checks import raises
 import modemnet
-from test_seatrac import up_driver
+from test_seatrac import SYS_INFO_EXAMPLE, settings_line, up_driver
 
 QSET_ABC = b"#64000361626330F7\r\n"  # dest 0 (any asker), 3 bytes "abc"
 QSET_OK = b"$64002AC0\r\n"
@@ -153,6 +153,19 @@ def test_driver_queue_reply_goes_through_the_command_slot():
     raises(EncodeError, d.queue_reply, 300, b"x", 16)
 
 
+def set_up_again(d, now):
+    # a restart's configuration (SYS_INFO, SETTINGS_GET); what the driver
+    # writes once it is up again
+    d.lost(now, "modem rebooted")
+    d.poll(now)
+    assert d.take_output() == b"#0281C1\r\n"
+    d.feed(now + 1, SYS_INFO_EXAMPLE)
+    assert d.take_output() == b"#15C1CF\r\n"
+    d.feed(now + 2, settings_line(1))
+    assert d.take_events()[-1] == (EV_DRIVER_UP,)
+    return d.take_output()
+
+
 def test_driver_forgets_the_queue_when_interrogated_and_requeues_after_a_reboot():
     d = up_driver()
     d.queue_reply(10, b"abc")
@@ -161,12 +174,13 @@ def test_driver_forgets_the_queue_when_interrogated_and_requeues_after_a_reboot(
     # beacon 2 asks us (MSG_REQU to 1): our beacon's reply takes the packet
     req = bytes((1, 2, 0, w.MSG_REQU)) + bytes(12) + b"\x00\x01?"
     d.feed(100, w.encode(w.SYNC_RSP, w.CID_DAT_RECEIVE, req))
-    assert d.queued_reply is None and d._q_want is None
+    assert d.queued_reply is None and d.take_events()[-1] == (EV_REPLIED,)
+    assert set_up_again(d, 150) == b""  # nothing to queue again: the reply took it
     d.queue_reply(200, b"new")
     d.take_output()
     d.feed(210, w.encode(w.SYNC_RSP, w.CID_DAT_QUEUE_SET, b"\x00"))
-    d.lost(300, "modem rebooted")
-    assert d.queued_reply is None and d._q_dirty
+    assert set_up_again(d, 300) == w.encode(w.SYNC_CMD, w.CID_DAT_QUEUE_SET, b"\x00\x03new")
+    assert d.queued_reply is None  # until the beacon confirms it
 
 
 def world3(overhear=True, diver_part=w.PART_X110, **emu):

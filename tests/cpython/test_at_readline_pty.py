@@ -143,7 +143,7 @@ def test_micromodem_rate0_from_a_host_that_waits_for_the_cycle_init(tmp_path):
     # rate 0 it waits for the cycle init's $CATXF before it expects $CADRQ,
     # and only then sends $CCTXD (the emulator used to skip it,
     # and such a host never sent its data)
-    from acomm.drivers import micromodem_nmea as nm
+    from acomm.drivers import micromodem_wire as nm
 
     r = Running(tmp_path, "micromodem", {"air_scale": 0.1, "banner": False})
     p = r.port

@@ -95,7 +95,7 @@ def test_emulate_log_on_a_pty_replays_the_frame_the_modem_heard(tmp_path):
     serial = pytest.importorskip("serial")
     if not sys.platform.startswith("linux") and sys.platform != "darwin":
         pytest.skip("needs POSIX pseudo-terminals")
-    from acomm.drivers import micromodem_nmea as nm
+    from acomm.drivers import micromodem_wire as nm
     from acomm_cpython.emulate import EmulatorHost
 
     log = tmp_path / "mm.jsonl"

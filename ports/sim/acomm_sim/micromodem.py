@@ -23,9 +23,9 @@
 # $CAREV INIT banner.
 
 from acomm.compat import ticks_add, ticks_diff
-from acomm.drivers import micromodem_nmea as nm
+from acomm.drivers import micromodem_wire as nm
 from acomm.drivers.base import SansIO
-from acomm.drivers.micromodem_air import FRAME_BYTES, FRAMES_PER_PACKET, Airtime
+from acomm.drivers.micromodem_wire import FRAME_BYTES, FRAMES_PER_PACKET, Airtime
 
 from .faults import FaultModes, cut, digit_off
 from .micromodem_xcvr import Transceiver

@@ -13,12 +13,12 @@
 #                 pinger prints $CAMPR,<remote>,<us>,<one-way seconds>
 #                 (from the medium's distance); nothing when no reply comes
 #
-# Airtimes come from acomm.drivers.micromodem_air (an estimate). The ack and
+# Airtimes come from acomm.drivers.micromodem_wire (an estimate). The ack and
 # the ping reply leave turnaround_ms after the packet that asked for them.
 
 from acomm.compat import ticks_add, ticks_diff
-from acomm.drivers import micromodem_nmea as nm
-from acomm.drivers.micromodem_air import Airtime
+from acomm.drivers import micromodem_wire as nm
+from acomm.drivers.micromodem_wire import Airtime
 
 P_DATA = "data"
 P_MINI = "mini"

@@ -92,7 +92,7 @@ class SeatracEmulator(SansIO, FaultModes):
         self._boot_at = ticks_add(now, -uptime_ms)
         self._booting_until = None
         self._now = now
-        self._dec = w.LineDecoder(w.SYNC_CMD, self)
+        self._dec = w.LineReader(w.SYNC_CMD, self)
         self._out = bytearray()
         self._line = bytearray(2 * w.MAX_MSG + 8)
         self._faults = []  # [kind, cid or None, count, execute]

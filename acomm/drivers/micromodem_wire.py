@@ -1,7 +1,12 @@
-# NMEA 0183 sentences as the WHOI Micro-Modem speaks them: building them,
-# checking their checksums, cutting a byte stream into sentences, and reading
-# their fields. Shared by the driver (acomm.drivers.micromodem) and the
-# emulator (ports/sim), so both ends agree on the bytes.
+# The WHOI Micro-Modem on the wire, as both ends see it. Shared by the driver
+# (acomm.drivers.micromodem) and the emulator (ports/sim), so both agree on
+# the bytes and on the time they take:
+#   NMEA 0183 sentences: building them, checking their checksums, cutting a
+#   byte stream into sentences, and reading their fields;
+#   the packet rates and an airtime model;
+#   node-discovery adverts carried as mini-packets.
+#
+# Sentences:
 #
 #   $ TALKER SENTENCE , field , field ... * HH CR LF
 #
@@ -14,9 +19,12 @@
 # it (the default), accept it unchecked, or refuse such lines (docs say how).
 # Lines from the modem end in CR, LF or both; the host writes CR LF.
 
+
 from ..compat import const
 from ..codec.crc import nmea_xor
-from .lineframe import SyncLines
+from ..errors import AcommError
+from ..frame import ADVERT
+from .base import SyncLines
 
 _HEX = b"0123456789ABCDEF"
 
@@ -100,7 +108,7 @@ JUNK_FORMAT = "format"  # no checksum, or not 2/8 hex digits, or no name
 
 
 class LineReader(SyncLines):
-    # Cuts the stream into '$' sentences (the framing is lineframe's); each
+    # Cuts the stream into '$' sentences (the framing is base.SyncLines); each
     # good one goes to sink.on_sentence(buf, n) with buf[:n] the text between '$' and '*'
     # (valid until the next feed). Damaged lines are dropped, counted in
     # self.junk and reported to sink.on_junk(kind). One preallocated buffer;
@@ -223,3 +231,102 @@ def hhmmss(ms):
     # Time of day in the modem's HHMMSS form from milliseconds since midnight.
     s = (ms // 1000) % 86400
     return "%02d%02d%02d" % (s // 3600, (s // 60) % 60, s % 60)
+
+
+# -- packet rates and airtime -------------------------------------------------
+# The driver's capabilities and watchdogs and the emulator's packet ends.
+#
+# Rates 0-5 (ref/modem-protocols.md 3.3; goby3 PACKET_SIZE): the largest
+# frame in bytes and the bit rate (from a WHOI header whose repository was not
+# identified, so unconfirmed). acomm sends one frame per cycle.
+#
+# Airtime, an ESTIMATE (nothing was measured):
+#   mini-packet (and each leg of a ping, and a frame's acknowledgement):
+#       mini_ms, 700 ms by default (seed 000: "about 0.7 s")
+#   rate 0 (FH-FSK): the cycle header travels as its own mini-packet first,
+#       then the data packet: mini_ms + fsk_gap_ms + 8 bits x n / 80 bit/s;
+#       with the defaults a 32-byte frame takes 0.7 + 4.0 s (seed 000: "about
+#       4 s more" than a mini-packet)
+#   rates 1-5 (PSK): header and data in one packet: psk_ms (preamble, probe
+#       and header) + 8 bits x n / bit rate
+# Every figure is multiplied by `scale` so tests on real time can run fast.
+
+FRAME_BYTES = (32, 64, 64, 256, 256, 256)
+BITRATE = (80, 250, 500, 1200, 1300, 5300)
+FRAMES_PER_PACKET = (1, 3, 3, 2, 2, 8)  # what the modem could carry; acomm uses 1
+
+
+class Airtime:
+    def __init__(self, mini_ms=700, fsk_gap_ms=800, psk_ms=1000, scale=1.0):
+        self.mini_ms_ = mini_ms
+        self.fsk_gap_ms = fsk_gap_ms
+        self.psk_ms = psk_ms
+        self.scale = scale
+
+    def mini_ms(self):
+        return int(self.mini_ms_ * self.scale)
+
+    def packet_ms(self, rate, nbytes):
+        bits_ms = nbytes * 8000 // BITRATE[rate]
+        if rate == 0:
+            t = self.mini_ms_ + self.fsk_gap_ms + bits_ms
+        else:
+            t = self.psk_ms + bits_ms
+        return int(t * self.scale)
+
+    def travel_ms(self, metres, sound_speed):
+        # propagation is physics: never scaled
+        return int(metres * 1000 / sound_speed)
+
+
+def check_rate(rate):
+    if not isinstance(rate, int) or not 0 <= rate <= 5:
+        raise AcommError("Micro-Modem rate %r outside 0..5" % (rate,))
+    return rate
+
+
+# -- adverts as mini-packets --------------------------------------------------
+# Node-discovery adverts as Micro-Modem mini-packets (seed 000: "This active
+# advertisement takes the form of a mini-packet destined to the broadcast
+# address"). A mini-packet carries 13 bits and takes about 0.7 s of air; a
+# full packet at rate 0 takes about 4.7 s.
+#
+# The Link hands the driver an elided acomm ADVERT frame (acomm.frame,
+# acomm.link.discovery): 3 bytes
+#     0 TTT SSSS   type ADVERT (2), no flags byte, 4-bit sequence
+#     node id
+#     advert period in units of 4 s (1..255)
+# When the node id equals the modem's own address (the Link's default
+# identity address map), the node id is implied by the mini-packet's source
+# address, and the rest fits in 13 bits:
+#
+#     bit 12      1: "this is an acomm advert" (the marker)
+#     bits 11..8  the frame's sequence
+#     bits 7..0   the period in 4 s units
+#
+# The receiver rebuilds the identical 3-byte frame with node id = the
+# mini-packet's source address. Values with bit 12 clear, or a zero period,
+# are not ours (someone else's use of mini-packets): counted and ignored.
+
+MARKER = const(0x1000)
+MASK = const(0x1FFF)
+_ADVERT_BYTE = ADVERT << 4  # the elided header byte (acomm.frame): no flags byte, sequence 0
+
+
+def advert_to_mini(frame, own_addr):
+    # The 13-bit value for this frame, or None when it must go as a normal
+    # packet (not a plain advert, or not for our own address).
+    if own_addr is None or len(frame) != 3:
+        return None
+    b0 = frame[0]
+    if b0 & 0xF0 != _ADVERT_BYTE or frame[1] != own_addr or frame[2] == 0:
+        return None
+    return MARKER | ((b0 & 0x0F) << 8) | frame[2]
+
+
+def mini_to_advert(value, src_addr):
+    # The elided ADVERT frame a mini-packet from src_addr stands for, or None.
+    value &= MASK
+    if not value & MARKER or not value & 0xFF or not 0 <= src_addr <= 254:
+        return None
+    return bytes((_ADVERT_BYTE | ((value >> 8) & 0x0F), src_addr, value & 0xFF))

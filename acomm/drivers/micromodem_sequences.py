@@ -1,6 +1,27 @@
-# The one acoustic transaction a Micro-Modem driver runs at a time, from the
-# moment the link hands it over until the modem's final word on it (or the
-# driver's watchdog), and the events that tell the link.
+# The two sequences the Micro-Modem driver (acomm.drivers.micromodem) runs:
+# its configuration (MicroModemConfig) and the one acoustic transaction under
+# way (AcousticSlot).
+#
+# The configuration, before the driver lets the link send, and again after
+# the modem rebooted ($CAREV,...,INIT) or stopped answering:
+#
+#   $CCCFG,SRC,<address>      when the constructor was given an address
+#                             (NVRAM SRC; the modem echoes $CACFG,SRC,<address>)
+#   $CCCFQ,SRC                when asked to (by default: only when no address
+#                             was given): $CACFG,SRC,<n> tells the driver the
+#                             modem's own address
+#   $CCCLK,YYYY,MM,DD,HH,MM,SS  when a clock function was given (MM1 sentence;
+#                             the modem echoes $CACLK)
+#
+# Each sentence goes through the driver's command slot, which resends it
+# after modem_wait_ms up to `retries` times (goby3: 5 s, 3 times). When one
+# stays unanswered the sequence starts over after retry_ms, and the link is
+# told once (EV_DRIVER_DOWN) per outage: after the first such failure, since
+# the resends already waited (the driver's down_after is 1).
+#
+# The transaction, from the moment the link hands it over until the modem's
+# final word on it (or the driver's watchdog), and the events that tell the
+# link:
 #
 # data frame (K_DATA), one frame per cycle:
 #   CYC   $CCCYC written; waiting for $CACYC (resent if unanswered)
@@ -17,7 +38,60 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_DELIVERED, EV_RANGE, EV_TX_DONE, EV_TX_FAILED
-from . import micromodem_nmea as nm
+from . import micromodem_wire as w
+from .base import ConfigSequence
+
+
+class MicroModemConfig(ConfigSequence):
+    """The modem's configuration: its address (set or asked) and its clock."""
+
+    def __init__(self, driver, address, query_src, clock, retry_ms):
+        ConfigSequence.__init__(self, driver, retry_ms)
+        self.want = address
+        self.query_src = (address is None) if query_src is None else query_src
+        self.clock = clock
+        self._steps = []
+        self._i = 0
+
+    def first(self):
+        steps = []
+        if self.want is not None:
+            steps.append(("CCCFG", ("SRC", self.want), b"CACFG"))
+        if self.query_src:
+            steps.append(("CCCFQ", ("SRC",), b"CACFG"))
+        if self.clock is not None:
+            steps.append(("CCCLK", None, b"CACLK"))
+        self._steps = steps
+        self._i = 0
+
+    def step(self, now):
+        if self._i >= len(self._steps):
+            self.done(now)
+            return
+        name, args, expect = self._steps[self._i]
+        if args is None:  # the clock, read at the moment it is sent
+            args = tuple(self.clock())
+        self.d.command(now, w.sentence(name, *args), expect)
+
+    def answer(self, now, f):
+        # The reply to the step in progress (f: the sentence's fields).
+        # Returns False when it is not (someone else's $CACFG, say).
+        name, args, expect = self._steps[self._i]
+        if f[0] != expect:
+            return False
+        if expect == b"CACFG":
+            if len(f) < 3 or f[1] != b"SRC":
+                return False
+            addr = w.num(f[2], 0, 254)
+            if addr is None:
+                self.failed(now, "modem reports SRC %r" % (bytes(f[2]),))
+                return True
+            if name == "CCCFG" and addr != self.want:
+                return False  # not the echo of our setting
+            self.d.own_addr = addr
+        self._i += 1
+        return True
+
 
 IDLE = const(0)
 CYC = const(1)
@@ -67,13 +141,13 @@ class AcousticSlot:
         if kind == K_DATA:
             self.state = CYC
             # CMD 0 (deprecated), SRC, DEST, RATE, ACK, NFRAMES = 1
-            d.command(now, nm.sentence("CCCYC", 0, src, addr, d.rate, 1 if ack else 0, 1), b"CACYC")
+            d.command(now, w.sentence("CCCYC", 0, src, addr, d.rate, 1 if ack else 0, 1), b"CACYC")
         elif kind == K_MINI:
             self.state = MUC
-            d.command(now, nm.sentence("CCMUC", src, addr, "%04X" % mini), b"CAMUC")
+            d.command(now, w.sentence("CCMUC", src, addr, "%04X" % mini), b"CAMUC")
         else:
             self.state = MPC
-            d.command(now, nm.sentence("CCMPC", src, addr), b"CAMPC")
+            d.command(now, w.sentence("CCMPC", src, addr), b"CAMPC")
 
     # -- answers from the modem ------------------------------------------------
     def echoed(self, now, name):
@@ -98,10 +172,10 @@ class AcousticSlot:
         flag = 1 if self.ack else 0
         if nbytes is not None and len(self.data) > nbytes:
             # the modem runs another rate than configured: close the cycle
-            d.write(nm.sentence("CCTXD", src, self.addr, flag, ""))
+            d.write(w.sentence("CCTXD", src, self.addr, flag, ""))
             self.fail("modem asked for %d bytes, frame has %d" % (nbytes, len(self.data)))
             return True
-        d.write(nm.sentence("CCTXD", src, self.addr, flag, nm.hexlify(self.data)))
+        d.write(w.sentence("CCTXD", src, self.addr, flag, w.hexlify(self.data)))
         self.state = TXD
         self.deadline = ticks_add(now, d.modem_wait_ms)
         return True
