@@ -64,7 +64,12 @@ def _unwrap(driver):
 
 
 def describe(values):
-    """A message's values (dict, nested dicts) as one short line of text."""
+    """A message's values (dict, nested dicts) as one short line of text; one value alone, bare."""
+    if len(values) == 1:
+        for k in values:
+            v = values[k]
+            if not isinstance(v, dict):
+                return "%.1f" % v if isinstance(v, float) else str(v)
     parts = []
     for k in sorted(values):  # MicroPython's dicts keep no order
 
@@ -148,7 +153,12 @@ class ConsoleState:
     # -- events in ---------------------------------------------------------------
     def sent(self, now, link, req_id, dst, cls, text, by=None):
         """Notes a request another application made (so its statuses show in the log)."""
-        return self._add_log(now, "tx", cls, dst, text, link, req_id, by)
+        e = self._add_log(now, "tx", cls, dst, text, link, req_id, by)
+        q = self._queued.get((link, req_id))
+        if q is not None:  # its `queued` came before the application could tell us
+            e["status"] = "queued"
+            e["timeline"].append([self._t(q), "queued"])
+        return e
 
     def on_event(self, ev, now=None):
         """A node event (acomm.events); the node's listener, or teed from it."""

@@ -19,6 +19,8 @@ package(
         "__init__.py",
         "_crc16_viper.py",
         "acktable.py",
+        "apps/__init__.py",
+        "apps/console.py",
         "arq.py",
         "auth.py",
         "authguard.py",
