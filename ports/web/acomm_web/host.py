@@ -106,6 +106,12 @@ class WebHost:
                 self._error = e
             finally:
                 started.set()
+                # the event streams and requests still open end with the server
+                rest = asyncio.all_tasks(loop)
+                for t in rest:
+                    t.cancel()
+                loop.run_until_complete(asyncio.gather(*rest, return_exceptions=True))
+                loop.close()
 
         self._thread = threading.Thread(target=run, name="acomm-web", daemon=True)
         self._thread.start()

@@ -67,6 +67,17 @@ def _same(a, b):
     return d == 0
 
 
+def _host(client_addr):
+    # the client's address as text: CPython gives (host, port); the
+    # MicroPython unix port the raw struct sockaddr_in (family, port, IPv4)
+    a = client_addr
+    if isinstance(a, (tuple, list)) and a and isinstance(a[0], str):
+        return a[0]
+    if isinstance(a, (bytes, bytearray)) and len(a) >= 8 and a[0] == 2:
+        return "%d.%d.%d.%d" % (a[4], a[5], a[6], a[7])
+    return "?"
+
+
 def _error(code, reason):
     return {"error": reason}, code
 
@@ -95,7 +106,7 @@ class WebConsole:
     # -- helpers -----------------------------------------------------------------
     def _who(self, request):
         # -> the operator's name, or None when a login is needed
-        addr = request.client_addr[0] if request.client_addr else "?"
+        addr = _host(request.client_addr)
         if self.password is None:
             return "operator@%s" % addr
         user = self.sessions.get(request.cookies.get(COOKIE) or "")
