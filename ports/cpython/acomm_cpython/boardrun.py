@@ -141,6 +141,7 @@ def main(args):
         wheres[lk["name"]] = (lk["modem"], dev)
         return s
 
+    closers = []
     store_open = None
     if args.store:
         st = cfg["storage"] or {"capacity": 1 << 22, "max_record": 1024}
@@ -162,6 +163,11 @@ def main(args):
         def tick():
             board.tick(ticks_ms())
 
+        web, wrap = nodeloop.start_web(args, node, out)
+        if web is not None:
+            closers.append(web)
+            tick = wrap(tick)
+            console.command = wrap(console.command)  # typed lines and the page's commands, one at a time
         nodeloop.wait_started(tick, watches, out, args.startup_timeout)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds)
@@ -170,12 +176,17 @@ def main(args):
     except ConfigError as e:
         print("acomm run: board %s: %s" % (name, e), file=sys.stderr)
         return 2
+    except nodeloop.WebError as e:
+        print("acomm run: %s" % e, file=sys.stderr)
+        return e.status
     except (ModemError, AcommError, OSError) as e:
         print("acomm run: %s" % nodeloop.describe(e), file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 0
     finally:
+        for c in closers:
+            c.close()
         for s in streams:
             s.close()
         store = board.transport.store if board is not None else None

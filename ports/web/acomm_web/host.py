@@ -132,6 +132,8 @@ class WebHost:
             self._loop.call_soon_threadsafe(app.shutdown)
             self._thread.join(2.0)
 
+    close = stop
+
 
 def paced(world, end_ms, speed, lock, after_step=None, chunk_ms=100, stop=None):
     """Runs a simulated World to end_ms at `speed` times real time, chunk by chunk under lock.
