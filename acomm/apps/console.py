@@ -6,8 +6,8 @@
 # imports no web library: acomm_web serves it over HTTP on CPython and on a
 # MicroPython board; tests drive it with plain calls.
 #
-# Every collection is bounded: the log keeps LOG_SIZE entries, the alarms
-# ALARM_SIZE (acknowledged ones go first), positions one fix and one range
+# Every collection is bounded: the log keeps log_size entries (LOG_SIZE by
+# default), the alarms alarm_size (acknowledged ones go first), positions one fix and one range
 # per node of the name table, quality one bucket per minute for an hour.
 #
 # Each view has a version number that changes when the view does, so a
@@ -85,8 +85,13 @@ def describe(values):
 class ConsoleState:
     """The console's picture of the network, fed by a node's events; commands become node calls."""
 
-    def __init__(self, node, catalogs=("caddy",), alarm_classes=("alarm",), lifespan_s=120, priority=3):
+    def __init__(self, node, catalogs=("caddy",), alarm_classes=("alarm",), lifespan_s=120, priority=3,
+                 log_size=LOG_SIZE, alarm_size=ALARM_SIZE):
+        # log_size, alarm_size: a board's heap may want fewer (about 0.3 KiB
+        # an entry on a 32-bit port: acomm bench web)
         self.node = node
+        self.log_size = log_size
+        self.alarm_size = alarm_size
         self.catalogs = []
         for name in catalogs:
             from ..catalog import load
@@ -141,7 +146,7 @@ class ConsoleState:
         e = {"id": self._log_n, "t": self._t(now), "dir": direction, "cls": cls, "peer": peer, "text": text,
              "link": link, "req": req, "by": by, "status": None, "timeline": []}
         self.log.append(e)
-        if len(self.log) > LOG_SIZE:
+        if len(self.log) > self.log_size:
             old = self.log.pop(0)
             if old["req"] is not None:
                 self._by_req.pop((old["link"], old["req"]), None)
@@ -239,7 +244,7 @@ class ConsoleState:
             self._alarm_n += 1
             self.alarms.append({"id": self._alarm_n, "t": self._t(now), "from": src, "text": text,
                                 "acked_by": None, "acked_t": None})
-            if len(self.alarms) > ALARM_SIZE:
+            if len(self.alarms) > self.alarm_size:
                 # the oldest acknowledged one goes first, else the oldest
                 k = 0
                 for i in range(len(self.alarms)):
