@@ -9,8 +9,9 @@
 # config names is opened as the pyserial port given for it; the console,
 # --json, --log and --store are those of `acomm node`.
 #
-# Left as on the board: the node, its links, drivers, transport, routes and
-# station. Different: no watchdog (a laptop has none), the store is in RAM
+# Left as on the board: the node, its links, drivers, transport, routes,
+# station and console (a `web` field; --web serves it elsewhere, or on a
+# board without the field). Different: no watchdog (a laptop has none), the store is in RAM
 # unless --store DIR (the config's flash path means nothing here), and the
 # loop is the console's.
 
@@ -163,7 +164,11 @@ def main(args):
         def tick():
             board.tick(ticks_ms())
 
-        web, wrap = nodeloop.start_web(args, node, out)
+        w = cfg.get("web")
+        if w is not None and not args.web:
+            # the board's own console field, as on the board
+            args.web = "%s:%d" % (w["host"], w["port"])
+        web, wrap = nodeloop.start_web(args, node, out, w["password"] if w is not None else None)
         if web is not None:
             closers.append(web)
             tick = wrap(tick)

@@ -147,7 +147,7 @@ class WebError(Exception):
         self.status = status
 
 
-def start_web(args, node, out):
+def start_web(args, node, out, password=None):
     """--web: the operator console (acomm_web) served beside the node -> (WebHost, tick wrapper) or (None, None).
 
     The node's listener is teed to the console's state; wrap the loop's
@@ -166,7 +166,7 @@ def start_web(args, node, out):
 
     try:
         host, port = parse_web(args.web)
-        pw = read_password(args.web_password_file) if args.web_password_file else None
+        pw = read_password(args.web_password_file) if args.web_password_file else password
     except (ValueError, AcommError) as e:
         raise WebError("--web: %s" % e, 2)
     state = ConsoleState(node, lifespan_s=args.lifespan)

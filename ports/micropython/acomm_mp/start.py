@@ -79,7 +79,14 @@ def start(config, make_report=None, machine=None):
                   make_report=make_report)
     if cfg["watchdog_ms"] and hasattr(machine, "WDT"):
         board.wdt = machine.WDT(timeout=cfg["watchdog_ms"])
+    print("acomm %s: node %d, links %s" % (cfg["name"], cfg["node_id"], ", ".join(board.node.links)))
+    if cfg["web"] is not None:
+        # the console runs the node in asyncio beside its server; imported
+        # by a name the flash closure does not follow: a board gets
+        # acomm_web only when its config has `web` (boardfiles.modules)
+        mod = "acomm_web.board"
+        __import__(mod, None, None, ("serve",)).serve(board, cfg["web"])
+        return
     from .runloop import run_blocking
 
-    print("acomm %s: node %d, links %s" % (cfg["name"], cfg["node_id"], ", ".join(board.node.links)))
     run_blocking(board)

@@ -16,7 +16,7 @@ import time
 
 from acomm.errors import AcommError
 
-from .server import WebConsole
+from .server import WebConsole, tee  # noqa: F401 - tee for the callers
 
 DEFAULT_HOST = "127.0.0.1"
 
@@ -44,19 +44,6 @@ def read_password(path):
     if not pw:
         raise AcommError("web password file %s: empty" % path)
     return pw
-
-
-def tee(node, state):
-    """Makes the node's listener also feed the ConsoleState (the old listener first)."""
-    old = node.listener
-
-    def both(ev):
-        if old is not None:
-            old(ev)
-        state.on_event(ev)
-
-    node.listener = both
-    return both
 
 
 def add_arguments(p):

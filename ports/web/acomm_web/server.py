@@ -82,6 +82,19 @@ def _error(code, reason):
     return {"error": reason}, code
 
 
+def tee(node, state):
+    """Makes the node's listener also feed the ConsoleState (the old listener first)."""
+    old = node.listener
+
+    def both(ev):
+        if old is not None:
+            old(ev)
+        state.on_event(ev)
+
+    node.listener = both
+    return both
+
+
 def page_path(name="page.html"):
     f = __file__
     i = f.rfind("/")
