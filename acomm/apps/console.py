@@ -37,20 +37,10 @@ ALARM_SIZE = const(16)
 BUCKET_MS = const(60000)
 BUCKETS = const(60)  # one hour of one-minute buckets
 _OPEN_REQS = const(64)  # requests whose queueing time is kept for the latency
-_TEXT_MAX = const(200)  # longest text an operator may type (the catalog's own limit applies)
 
 VIEWS = ("info", "nodes", "positions", "log", "alarms", "queue", "quality")
 
-# the operator's catalog commands: catalog -> names accepted
-SEAWARE_COMMANDS = ("start_mission", "stop_mission", "rendezvous_on", "rendezvous_off")
 
-
-class Refused(Exception):
-    # a command the console will not carry out: code (a 4xx) and reason
-    def __init__(self, code, reason):
-        super().__init__(reason)
-        self.code = code
-        self.reason = reason
 
 
 def _age_s(now, then):
@@ -122,14 +112,16 @@ class ConsoleState:
         self.rejected = 0  # commands answered with a 4xx
 
     # -- bookkeeping -----------------------------------------------------------
-    def _bump(self, view):
+    def bump(self, view):
+        """Marks a view changed (its version moves on)."""
         self._v[view] += 1
 
     def versions(self):
         """{view: version}: a view's number changes whenever the view does."""
         return self._v
 
-    def _t(self, now):
+    def t_s(self, now):
+        """Seconds (0.1 s steps) since the console started, of ticks now."""
         return ticks_diff(now, self.t0) // 100 / 10
 
     def _bucket(self, now):
@@ -141,9 +133,10 @@ class ConsoleState:
                 b.pop(0)
         return b[-1]
 
-    def _add_log(self, now, direction, cls, peer, text, link=None, req=None, by=None):
+    def add_log(self, now, direction, cls, peer, text, link=None, req=None, by=None):
+        """A new log entry (dict; direction rx, tx or op); a request's statuses will join its timeline."""
         self._log_n += 1
-        e = {"id": self._log_n, "t": self._t(now), "dir": direction, "cls": cls, "peer": peer, "text": text,
+        e = {"id": self._log_n, "t": self.t_s(now), "dir": direction, "cls": cls, "peer": peer, "text": text,
              "link": link, "req": req, "by": by, "status": None, "timeline": []}
         self.log.append(e)
         if len(self.log) > self.log_size:
@@ -152,17 +145,17 @@ class ConsoleState:
                 self._by_req.pop((old["link"], old["req"]), None)
         if req is not None:
             self._by_req[(link, req)] = e
-        self._bump("log")
+        self.bump("log")
         return e
 
     # -- events in ---------------------------------------------------------------
     def sent(self, now, link, req_id, dst, cls, text, by=None):
         """Notes a request another application made (so its statuses show in the log)."""
-        e = self._add_log(now, "tx", cls, dst, text, link, req_id, by)
+        e = self.add_log(now, "tx", cls, dst, text, link, req_id, by)
         q = self._queued.get((link, req_id))
         if q is not None:  # its `queued` came before the application could tell us
             e["status"] = "queued"
-            e["timeline"].append([self._t(q), "queued"])
+            e["timeline"].append([self.t_s(q), "queued"])
         return e
 
     def on_event(self, ev, now=None):
@@ -179,18 +172,18 @@ class ConsoleState:
         elif code == _EV_PACKET_STATUS:
             self._status(now, "transport", ev[1], ev[2], ev[3])
         elif code == _EV_AVAILABILITY:
-            self._bump("nodes")
+            self.bump("nodes")
         elif code == _EV_CAPS:
-            self._bump("info")
+            self.bump("info")
         elif code == _EV_RANGE_RECEIVED:
             names, metres = ev[3], ev[4]
             for i in range(len(names)):
                 if metres[i] is not None:
                     self.ranges[names[i]] = [now, metres[i]]
-            self._bump("positions")
+            self.bump("positions")
         elif code == _EV_REFUSED:
             self.refused += 1
-            self._add_log(now, "rx", "refused", ev[2], ev[3], ev[1].name if ev[1] is not None else None)
+            self.add_log(now, "rx", "refused", ev[2], ev[3], ev[1].name if ev[1] is not None else None)
 
     def _status(self, now, link, req, status, reason):
         key = (link, req)
@@ -199,17 +192,17 @@ class ConsoleState:
             self._qorder.append(key)
             if len(self._qorder) > _OPEN_REQS:
                 self._queued.pop(self._qorder.pop(0), None)
-            self._bump("queue")
+            self.bump("queue")
         e = self._by_req.get(key)
         if e is not None:
             name = STATUS_NAMES[status] if 0 < status < len(STATUS_NAMES) else str(status)
             e["status"] = name
-            e["timeline"].append([self._t(now), name])
+            e["timeline"].append([self.t_s(now), name])
             if reason:
                 e["reason"] = reason
-            self._bump("log")
+            self.bump("log")
         if is_final(status):
-            self._bump("queue")
+            self.bump("queue")
             t0 = self._queued.pop(key, None)
             if status >= _DELIVERED and status != _CANCELED:
                 # PDR: delivered / (delivered + expired + failed); a one-way
@@ -222,7 +215,7 @@ class ConsoleState:
                     if t0 is not None:
                         b[3] += ticks_diff(now, t0)
                         b[4] += 1
-                self._bump("quality")
+                self.bump("quality")
 
     def decode(self, data):
         """(class, text) of a payload: the first catalog that parses it, else ("data", hex)."""
@@ -238,11 +231,11 @@ class ConsoleState:
 
     def _received(self, now, link, src, data, authed):
         cls, text = self.decode(data)
-        e = self._add_log(now, "rx", cls, src, text, link)
+        e = self.add_log(now, "rx", cls, src, text, link)
         e["sealed"] = bool(authed)
         if cls in self.alarm_classes:
             self._alarm_n += 1
-            self.alarms.append({"id": self._alarm_n, "t": self._t(now), "from": src, "text": text,
+            self.alarms.append({"id": self._alarm_n, "t": self.t_s(now), "from": src, "text": text,
                                 "acked_by": None, "acked_t": None})
             if len(self.alarms) > self.alarm_size:
                 # the oldest acknowledged one goes first, else the oldest
@@ -252,7 +245,7 @@ class ConsoleState:
                         k = i
                         break
                 self.alarms.pop(k)
-            self._bump("alarms")
+            self.bump("alarms")
 
     def poll(self, now):
         """Notices what no event announces: new USBL fixes, last-heard times, retries."""
@@ -270,13 +263,13 @@ class ConsoleState:
                 if self._heard.get((lname, name)) != h:
                     if len(self._heard) < 4 * len(node.names) + 8:
                         self._heard[(lname, name)] = h
-                    self._bump("nodes")
+                    self.bump("nodes")
         r = 0
         for lname in node.links:
             r += node.links[lname].stats.get("retries", 0)
         if self._retries is not None and r != self._retries:
             self._bucket(now)[5] += r - self._retries
-            self._bump("quality")
+            self.bump("quality")
         self._retries = r
 
     def _take_fix(self, now, link, fix):
@@ -291,7 +284,7 @@ class ConsoleState:
             self.fixes[name] = [now, fix["easting"], fix["northing"], fix.get("depth"), "usbl"]
         if fix.get("range") is not None:
             self.ranges[name] = [now, fix["range"]]
-        self._bump("positions")
+        self.bump("positions")
 
     # -- views -------------------------------------------------------------------
     def view(self, name, now):
@@ -374,7 +367,7 @@ class ConsoleState:
         for b in self._buckets:
             if ticks_diff(now, b[0]) >= BUCKET_MS * BUCKETS:
                 continue
-            rows.append({"t": self._t(b[0]), "acked": b[1], "pdr": None if not b[1] else round(b[2] / b[1], 3),
+            rows.append({"t": self.t_s(b[0]), "acked": b[1], "pdr": None if not b[1] else round(b[2] / b[1], 3),
                          "latency_s": None if not b[4] else round(b[3] / b[4] / 1000, 1), "retries": b[5]})
         return {"bucket_s": BUCKET_MS // 1000, "buckets": rows}
 
@@ -385,137 +378,7 @@ class ConsoleState:
         Ops: chat {dst, text}, command {dst, catalog caddy|seaware, name},
         cancel {req, link}, range {dst}, ack {alarm}. 202 with the request
         id when queued on the node, 200 when done, a 4xx with a reason when
-        refused."""
-        try:
-            if not isinstance(cmd, dict):
-                raise Refused(400, "a command is a JSON object")
-            op = cmd.get("op")
-            if op == "chat":
-                ans = self._chat(now, cmd, who)
-            elif op == "command":
-                ans = self._catalog_command(now, cmd, who)
-            elif op == "cancel":
-                ans = self._cancel(now, cmd, who)
-            elif op == "range":
-                ans = self._range(now, cmd, who)
-            elif op == "ack":
-                ans = self._ack(now, cmd, who)
-            else:
-                raise Refused(400, "unknown op %r: chat, command, cancel, range or ack" % (op,))
-        except Refused as e:
-            self.rejected += 1
-            return e.code, {"error": e.reason}
-        self.commands += 1
-        return ans
+        refused (acomm.apps.consolecmd)."""
+        from .consolecmd import execute
 
-    def _dst(self, cmd):
-        dst = cmd.get("dst")
-        if not isinstance(dst, str) or not dst:
-            raise Refused(400, "dst: a node name is needed")
-        if self.node.names.id_of(dst) is None:
-            raise Refused(404, "unknown node %r" % dst)
-        if dst == self.node.name:
-            raise Refused(400, "%r is this node" % dst)
-        return dst
-
-    def _link_for(self, cmd, dst, need_ranging=False):
-        # the link asked for, else the first that has heard dst, else the first
-        node = self.node
-        lname = cmd.get("link")
-        if lname is not None:
-            if lname not in node.links:
-                raise Refused(404, "unknown link %r" % (lname,))
-            return node.links[lname]
-        first = None
-        for k in node.links:
-            link = node.links[k]
-            if need_ranging and "ranging" not in link.caps.flag_names():
-                continue
-            if link.availability(dst) == 1:
-                return link
-            if first is None:
-                first = link
-        if first is None:
-            raise Refused(409, "no link of this node can %s" % ("range" if need_ranging else "send"))
-        return first
-
-    def _send(self, now, cmd, who, dst, data, cls, text):
-        link = self._link_for(cmd, dst)
-        rid = self.node.next_req_id()
-        e = self._add_log(now, "tx", cls, dst, text, link.name, rid, who)
-        if not link.request(now, rid, dst, data, self.lifespan_s, self.priority, True):
-            self._refused(e, "queued")
-        return 202, {"req": rid, "link": link.name, "log": e["id"]}
-
-    def _refused(self, e, what):
-        # the link said no (its `failed` status, with the reason, reached
-        # the log when this console hears the node's events)
-        raise Refused(409, "not %s: %s" % (what, e.get("reason") or "refused by the link"))
-
-    def _chat(self, now, cmd, who):
-        dst = self._dst(cmd)
-        text = cmd.get("text")
-        if not isinstance(text, str) or not text or len(text) > _TEXT_MAX:
-            raise Refused(400, "text: 1 to %d characters" % _TEXT_MAX)
-        from ..catalog import caddy
-
-        try:
-            data = caddy.CATALOG.pack([(caddy.CHAT, {"text": text})])
-        except AcommError as e:
-            raise Refused(400, "text: %s" % e)
-        return self._send(now, cmd, who, dst, data, "chat", text)
-
-    def _catalog_command(self, now, cmd, who):
-        dst = self._dst(cmd)
-        cat, name = cmd.get("catalog"), cmd.get("name")
-        if cat == "caddy":
-            from ..catalog import caddy
-
-            if name not in caddy.COMMANDS:
-                raise Refused(400, "name: one of the CADDY commands %s" % ", ".join(caddy.COMMANDS))
-            data = caddy.CATALOG.pack([(caddy.COMMAND, {"command": name})])
-        elif cat == "seaware":
-            from ..catalog import seaware
-
-            if name not in SEAWARE_COMMANDS:
-                raise Refused(400, "name: one of the Seaware commands %s" % ", ".join(SEAWARE_COMMANDS))
-            data = seaware.encode(self.node.node_id & seaware.MAX_ADDR, name)
-        else:
-            raise Refused(400, "catalog: caddy or seaware")
-        return self._send(now, cmd, who, dst, data, "command", "%s %s" % (cat, name))
-
-    def _cancel(self, now, cmd, who):
-        req, lname = cmd.get("req"), cmd.get("link")
-        if not isinstance(req, int) or isinstance(req, bool):
-            raise Refused(400, "req: the request id to cancel")
-        links = [lname] if lname is not None else list(self.node.links)
-        for k in links:
-            if k not in self.node.links:
-                raise Refused(404, "unknown link %r" % (k,))
-            if self.node.links[k].cancel(now, req, "canceled by %s" % who):
-                self._add_log(now, "op", "cancel", None, "request %d canceled" % req, k, None, who)
-                return 200, {"canceled": req, "link": k}
-        raise Refused(404, "no open request %d" % req)
-
-    def _range(self, now, cmd, who):
-        dst = self._dst(cmd)
-        link = self._link_for(cmd, dst, True)
-        if "ranging" not in link.caps.flag_names():
-            raise Refused(409, "link %s cannot measure range" % link.name)
-        rid = self.node.next_req_id()
-        e = self._add_log(now, "tx", "range", dst, "range " + dst, link.name, rid, who)
-        if not link.range(now, rid, [dst], self.lifespan_s):
-            self._refused(e, "ranged")
-        return 202, {"req": rid, "link": link.name, "log": e["id"]}
-
-    def _ack(self, now, cmd, who):
-        aid = cmd.get("alarm")
-        for a in self.alarms:
-            if a["id"] == aid:
-                if a["acked_by"] is None:
-                    a["acked_by"] = who
-                    a["acked_t"] = self._t(now)
-                    self._add_log(now, "op", "ack", a["from"], "alarm %d acknowledged" % aid, None, None, who)
-                    self._bump("alarms")
-                return 200, {"alarm": aid, "acked_by": a["acked_by"]}
-        raise Refused(404, "no alarm %r" % (aid,))
+        return execute(self, now, cmd, who)

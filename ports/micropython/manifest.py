@@ -21,6 +21,7 @@ package(
         "acktable.py",
         "apps/__init__.py",
         "apps/console.py",
+        "apps/consolecmd.py",
         "arq.py",
         "auth.py",
         "authguard.py",
