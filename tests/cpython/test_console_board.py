@@ -91,7 +91,8 @@ def test_the_tablet_serves_its_console_on_micropython():
                 if time.monotonic() > end:
                     raise
                 time.sleep(0.2)
-        req = urllib.request.Request(url + "/api/login", data=json.dumps({"user": "dive", "password": "reef"}).encode())
+        req = urllib.request.Request(url + "/api/login", data=json.dumps({"user": "dive", "password": "reef"}).encode(),
+                                     headers={"Content-Type": "application/json"})
         with urllib.request.urlopen(req, timeout=3) as r:
             cookie = r.headers["Set-Cookie"].split(";")[0]
         req = urllib.request.Request(url + "/api/view/info", headers={"Cookie": cookie})

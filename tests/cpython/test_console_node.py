@@ -23,7 +23,8 @@ def free_port():
 
 def call(url, body=None, cookie=None):
     req = urllib.request.Request(url, data=None if body is None else json.dumps(body).encode(),
-                                 headers={"Cookie": cookie} if cookie else {})
+                                 headers=dict({"Content-Type": "application/json"}, **({"Cookie": cookie} if cookie
+                                                                                       else {})))
     try:
         with urllib.request.urlopen(req, timeout=5) as r:
             return r.status, json.loads(r.read()), r.headers.get("Set-Cookie", "")

@@ -5,7 +5,8 @@
 #   - the page, gzip-compressed when the client accepts it, and its shipped
 #     gzip in step with it;
 #   - bad input: a malformed request, an unknown route, a missing or wrong
-#     password, a command for an unknown node: a 4xx with a reason, and the
+#     password, a command for an unknown node, a command not sent as JSON
+#     (what a cross-site form would send): a 4xx with a reason, and the
 #     node keeps running;
 #   - a hundred open event streams: at most max_streams stay open, the
 #     oldest are closed, and the server still answers;
@@ -39,7 +40,9 @@ def free_port():
 
 def request(port, method, path, body=None, headers=None):
     c = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
-    c.request(method, path, body=body, headers=headers or {})
+    h = {"Content-Type": "application/json"} if body is not None else {}
+    h.update(headers or {})
+    c.request(method, path, body=body, headers=h)
     r = c.getresponse()
     data = r.read()
     c.close()
@@ -81,6 +84,7 @@ PROBES = [
     ("POST", "/api/command", b'{"op": "chat", "dst": "nemo", "text": "hi"}'),
     ("POST", "/api/command", b'{"op": "launch"}'),
     ("POST", "/api/command", b'{"op": "ack", "alarm": 1}'),
+    ("POST", "/api/command", (b'{"op": "ack", "alarm": 1}', "text/plain")),
     ("GET", "/api/view/alarms", None),
     ("POST", "/api/login", b'{"user": "bob"}'),
     ("GET", "/api/state", None),
@@ -90,7 +94,10 @@ PROBES = [
 def answers(port):
     out = []
     for method, path, body in PROBES:
-        status, _, data = request(port, method, path, body)
+        h = None
+        if isinstance(body, tuple):  # (body, content type)
+            body, h = body[0], {"Content-Type": body[1]}
+        status, _, data = request(port, method, path, body, h)
         out.append((method, path, status, json.loads(data)))
     return out
 
@@ -128,10 +135,10 @@ def test_the_same_routes_answer_the_same_json_on_micropython():
     for a, b in zip(cp, mp):
         assert a == b, (a, b)
     codes = [a[2] for a in cp[:-1]]
-    assert codes == [200] * 7 + [404, 404, 400, 404, 400, 200, 200, 200, 200], codes
-    assert cp[13][3]["data"]["alarms"][0]["acked_by"] == "operator@127.0.0.1"
+    assert codes == [200] * 7 + [404, 404, 400, 404, 400, 200, 415, 200, 200, 200], codes
+    assert cp[14][3]["data"]["alarms"][0]["acked_by"] == "operator@127.0.0.1"
     assert "diver" in cp[2][3]["data"]["fixes"] and cp[4][3]["data"]["unacked"] == 1
-    for k in (7, 8, 9, 10, 11):
+    for k in (7, 8, 9, 10, 11, 13):
         assert cp[k][3]["error"], cp[k]
 
 
@@ -193,8 +200,10 @@ def test_password_bad_input_and_the_command_log(served):
         ("POST", "/api/command", b'{"op": "chat", "dst": "nemo", "text": "hi"}', 404),
         ("POST", "/api/command", b'{"op": "range", "dst": "buoy"}', 400),
         ("POST", "/api/command", b"{" * 20000, 413),
+        ("POST", "/api/command", b'{"op": "range", "dst": "diver"}', 415),  # a cross-site form's type
     ]:
-        s, _, data = request(port, method, path, body, h)
+        hh = dict(h, **({"Content-Type": "text/plain"} if want == 415 else {}))
+        s, _, data = request(port, method, path, body, hh)
         assert s == want and json.loads(data)["error"], (path, body and body[:40], s, data[:200])
     # the node keeps running: a chat line goes out and is delivered
     s, _, data = request(port, "POST", "/api/command", b'{"op": "chat", "dst": "diver", "text": "still here"}', h)

@@ -222,7 +222,9 @@ def main(args):
         if web is not None:
             closers.append(web)
             tick = wrap(tick)
-            console.command = wrap(console.command)  # typed lines and the page's commands, one at a time
+            # typed lines, the --send list and the page's commands, one at a time
+            console.command = wrap(console.command)
+            console.poll = wrap(console.poll)
         nodeloop.wait_started(tick, watches, out, args.startup_timeout)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         pending = [keyval(m) for m in args.send]

@@ -14,16 +14,18 @@
 #   POST /api/login           {"user", "password"} -> a session cookie
 #   POST /api/command         a ConsoleState command -> its code and answer
 #
-# Every refusal is a 4xx with {"error": reason}. With a password every /api
-# route but login needs the session cookie (401 otherwise); without one the
-# console is open, and only to the address it listens on (loopback unless
-# told otherwise). Each command is logged with who sent it: the login name
-# and the client's address.
+# Every refusal is a 4xx with {"error": reason}. Commands and logins come
+# as application/json only (415 otherwise): a page elsewhere cannot make a
+# browser send that here without a CORS preflight, which is never granted.
+# With a password every /api route but login needs the session cookie (401
+# otherwise); without one the console is open, to whoever reaches the
+# address it listens on (loopback unless told otherwise). Each command is
+# logged with who sent it: the login name and the client's address.
 
 import asyncio
 import json
 
-from microdot import Microdot, Response
+from microdot import Microdot, Request, Response
 from microdot.sse import with_sse
 
 from acomm.apps.console import VIEWS
@@ -34,6 +36,7 @@ _AGING = ("nodes", "positions", "queue")
 _SESSIONS = 16  # logins kept; the oldest is forgotten
 _BACKLOG = 4  # events waiting for a slow stream; beyond, updates wait for it
 COOKIE = "acomm_session"
+MAX_BODY = 1024  # a command or a login is a few dozen bytes; more is refused (413) unread
 
 
 class _NoLock:
@@ -96,6 +99,7 @@ def tee(node, state):
 
 
 def page_path(name="page.html"):
+    """The path of a file shipped beside this module (the page and its gzip)."""
     f = __file__
     i = f.rfind("/")
     return (f[:i] if i >= 0 else ".") + "/" + name
@@ -126,6 +130,7 @@ class WebConsole:
         return None if user is None else "%s@%s" % (user, addr)
 
     def views(self, names=VIEWS):
+        """{view name: {"version", "data"}} of the views named, taken under the lock."""
         with self.lock:
             now = self.state.node.clock()
             v = self.state.versions()
@@ -146,6 +151,9 @@ class WebConsole:
 
     # -- the routes --------------------------------------------------------------
     def _make_app(self, extra_routes):
+        # microdot's limits are class-wide: the console is the process's one app
+        Request.max_content_length = MAX_BODY
+        Request.max_body_length = MAX_BODY
         app = Microdot()
         wc = self
 
@@ -178,6 +186,8 @@ class WebConsole:
 
         @app.post("/api/login")
         async def login(request):
+            if not _is_json(request):
+                return _error(415, JSON_ONLY)
             body = _json(request)
             if not isinstance(body, dict):
                 return _error(400, "a login is a JSON object {user, password}")
@@ -217,6 +227,8 @@ class WebConsole:
             who = wc._who(request)
             if who is None:
                 return _error(401, "login needed")
+            if not _is_json(request):
+                return _error(415, JSON_ONLY)
             body = _json(request)
             if body is None:
                 return _error(400, "the body must be a JSON object")
@@ -257,6 +269,17 @@ class WebConsole:
         if extra_routes is not None:
             extra_routes(app, wc)
         return app
+
+
+# A page elsewhere can make the operator's browser post a form here
+# (text/plain, urlencoded, multipart) without asking; it cannot post
+# application/json without a CORS preflight, which this server never
+# grants. So commands and logins come as JSON only.
+JSON_ONLY = "Content-Type must be application/json"
+
+
+def _is_json(request):
+    return (request.headers.get("Content-Type") or "").split(";")[0].strip().lower() == "application/json"
 
 
 def _json(request):
