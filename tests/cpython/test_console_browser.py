@@ -8,7 +8,8 @@
 #   - the plan view places the diver within the USBL's error of its true
 #     position (the demo's /api/sim says where the diver is and how large
 #     the X150's errors are);
-#   - the diver's alarm shows and is acknowledged.
+#   - the diver's alarm shows and is acknowledged;
+#   - on a phone's screen the page is one column, no wider than the screen.
 # Screenshots go to build/artefacts/console/ (git-ignored); docs/img/ keeps
 # one set of them. The mission runs at 40x real time so that the alarm
 # (390 s into the mission) comes within about 10 s.
@@ -157,6 +158,12 @@ def test_the_console_shows_the_mission_in_a_browser(tmp_path):
                 assert "acknowledged by operator@127.0.0.1" in page.locator("#alarms").inner_text()
                 assert demo.get("/api/view/alarms")["data"]["unacked"] == 0
                 page.screenshot(path=os.path.join(ART, "4-acknowledged.png"), full_page=True)
+
+                # on a phone: one column, nothing wider than the screen
+                page.set_viewport_size({"width": 390, "height": 844})
+                page.wait_for_timeout(300)
+                assert page.evaluate("document.documentElement.scrollWidth") <= 390
+                page.screenshot(path=os.path.join(ART, "5-phone.png"))
             finally:
                 browser.close()
         demo.wait_line("-> 200", 5)  # the acknowledgement, logged with who sent it

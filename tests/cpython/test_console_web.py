@@ -264,3 +264,18 @@ def test_parse_web_and_the_password_file(tmp_path):
     assert read_password(str(p)) == "secret"
     with pytest.raises(AcommError):
         read_password(str(tmp_path / "none"))
+
+
+def test_bench_web_reports_the_page_and_the_heap():
+    import subprocess as sp
+
+    r = sp.run([sys.executable, "-m", "acomm_cpython.cli", "bench", "web", "--json"], capture_output=True, text=True,
+               timeout=120, cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    got = dict((d["name"], d) for d in map(json.loads, r.stdout.splitlines()))
+    assert got["web_page_gzip_bytes"]["value"] < got["web_page_bytes"]["value"] == webpage.sizes()[0]
+    if os.path.exists(MP):
+        steps = ("console_code", "microdot", "server_code", "state_empty", "app", "state_full")
+        v = dict((k, got["web_heap_%s_unix_py" % k]["value"]) for k in steps)
+        assert all(x > 0 for x in v.values()) and got["web_heap_total_unix_py"]["unit"] == "B", v
+        assert got["web_heap_total_unix_py"]["value"] == sum(v.values())

@@ -51,7 +51,6 @@ def _compile_tree(mpy_cross, src_root, pkg, dst_root):
 def run(emit):
     import acomm
     import acomm_web
-    import microdot
     from acomm_web import page
 
     from ..bench import find_micropython
@@ -59,6 +58,11 @@ def run(emit):
     raw, gz = page.sizes()
     emit("web_page_bytes", raw, "B")
     emit("web_page_gzip_bytes", gz, "B")
+    try:
+        import microdot
+    except ImportError:
+        print("note: no microdot (pip install 'acomm[web]'): the heap figures are skipped", file=sys.stderr)
+        return
     core = os.path.dirname(os.path.dirname(os.path.abspath(acomm.__file__)))
     web = os.path.dirname(os.path.dirname(os.path.abspath(acomm_web.__file__)))
     md = os.path.dirname(os.path.dirname(os.path.abspath(microdot.__file__)))
