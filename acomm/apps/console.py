@@ -110,6 +110,8 @@ class ConsoleState:
         self.refused = 0  # frames the node's key check refused (EV_REFUSED)
         self.commands = 0
         self.rejected = 0  # commands answered with a 4xx
+        self.errors = 0  # events the console failed on (its server's tee counts them)
+        self.last_error = None
 
     # -- bookkeeping -----------------------------------------------------------
     def bump(self, view):
@@ -313,7 +315,7 @@ class ConsoleState:
             links.append({"name": lname, "model": ("%s %s" % (c.manufacturer, c.model)).strip(), "mtu": c.mtu_tx,
                           "bitrate": c.bitrate, "latency_ms": c.latency_ms, "caps": c.flag_names()})
         return {"name": node.name, "id": node.node_id, "links": links, "sealed": node.auth is not None,
-                "catalogs": [c.name for c in self.catalogs]}
+                "catalogs": [c.name for c in self.catalogs], "errors": self.errors, "last_error": self.last_error}
 
     def _nodes(self, now):
         node = self.node

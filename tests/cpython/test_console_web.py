@@ -279,3 +279,19 @@ def test_bench_web_reports_the_page_and_the_heap():
         v = dict((k, got["web_heap_%s_unix_py" % k]["value"]) for k in steps)
         assert all(x > 0 for x in v.values()) and got["web_heap_total_unix_py"]["unit"] == "B", v
         assert got["web_heap_total_unix_py"]["value"] == sum(v.values())
+
+
+def test_a_console_error_never_stops_the_node():
+    from acomm.events import DELIVERED, EV_STATUS
+    from acomm_web.server import tee
+
+    w, state = build()
+    node = w.nodes["buoy"].node
+    got = []
+    node.listener = got.append
+    tee(node, state)
+    state.on_event = None  # broken: every event raises TypeError
+    node.send("acoustic", "diver", b"still", 60, 2, True)
+    w.run(30000)
+    assert [ev[3] for ev in got if ev[0] == EV_STATUS][-1] == DELIVERED, got
+    assert state.errors == len(got) and state.last_error.startswith("TypeError"), (len(got), state.errors)

@@ -86,13 +86,20 @@ def _error(code, reason):
 
 
 def tee(node, state):
-    """Makes the node's listener also feed the ConsoleState (the old listener first)."""
+    """Makes the node's listener also feed the ConsoleState (the old listener first).
+
+    An error in the console is counted (state.errors, in its info view)
+    and goes no further: the console must never stop the node."""
     old = node.listener
 
     def both(ev):
         if old is not None:
             old(ev)
-        state.on_event(ev)
+        try:
+            state.on_event(ev)
+        except Exception as e:  # noqa: BLE001 - see the docstring
+            state.errors += 1
+            state.last_error = "%s: %s" % (type(e).__name__, e)
 
     node.listener = both
     return both
