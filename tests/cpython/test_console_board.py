@@ -3,7 +3,8 @@
 # side, acomm.apps.console, microdot, the page) and only then: the buoy's
 # files have none of it; and the diver's tablet with the field runs its
 # node and the console's server in one asyncio loop on the MicroPython
-# unix port, with the password asked for.
+# unix port, with the password asked for; `acomm run` serves a board's
+# console as the board would.
 import json
 import os
 import shutil
@@ -105,3 +106,45 @@ def test_the_tablet_serves_its_console_on_micropython():
         if p.poll() is None:
             p.kill()
             p.wait()
+
+
+def test_acomm_run_serves_the_console_of_a_board_with_web(tmp_path):
+    pytest.importorskip("serial")
+    from consoleprocs import Proc, Water
+
+    board = tmp_path / "diver_web"
+    shutil.copytree(DIVER, board)
+    port = _free_port()
+    src = (board / "config.py").read_text()
+    (board / "config.py").write_text(src.replace(
+        '"station":', '"web": {"host": "127.0.0.1", "port": %d, "password": "reef"},\n    "station":' % port))
+    fast = ["--driver-option", "packet_ms=25", "--driver-option", "byte_ms=4", "--driver-option", "turnaround_ms=15"]
+    url = "http://127.0.0.1:%d" % port
+
+    def post(path, body, cookie=None):
+        h = {"Content-Type": "application/json"}
+        if cookie:
+            h["Cookie"] = cookie
+        req = urllib.request.Request(url + path, data=json.dumps(body).encode(), headers=h)
+        with urllib.request.urlopen(req, timeout=5) as r:
+            return r.status, json.loads(r.read()), r.headers.get("Set-Cookie", "")
+
+    with Water(tmp_path, time_scale=20) as water:
+        buoy = Proc(["node", "--name", "buoy", "--id", "1", "--known", "diver=2", "--modem",
+                     "seatrac:" + water.paths[0]] + fast)
+        diver = Proc(["run", str(board), "--uart", "UART1=" + water.paths[1]])
+        try:
+            diver.expect("console: %s/" % url)
+            diver.expect("ready: node diver (2) on acoustic")
+            buoy.expect("ready")
+            buoy.send("send diver hello --ack")
+            assert buoy.expect("status acoustic") == "status acoustic 1 delivered"
+            _, ans, cookie = post("/api/login", {"user": "dive", "password": "reef"})
+            code, ans, _ = post("/api/command", {"op": "chat", "dst": "buoy", "text": "all good"}, cookie.split(";")[0])
+            assert code == 202, ans
+            buoy.expect("received acoustic diver -> buoy")
+            diver.expect("web: dive@127.0.0.1")
+        finally:
+            for p in (buoy, diver):
+                rc, err = p.finish()
+                assert rc == 0 and "Traceback" not in err, (err, p.lines)
