@@ -361,7 +361,14 @@ class ConsoleState:
         t = self.node.transport
         store = None
         if t is not None:
-            store = {"pending": len(t.pending()) if hasattr(t, "pending") else None}
+            # the transport's packets on their way out, from its list of
+            # them (no public accessor yet); expiry is in its wall seconds
+            wall = t.wall()
+            store = []
+            for p in getattr(t, "_out", ()):
+                store.append({"pid": p.pid, "dst": self.node.names.name_of(p.final), "priority": p.prio,
+                              "bytes": p.size, "relayed": p.relayed, "cls": "p%d" % p.prio,
+                              "expires_s": p.expiry - wall})
         return {"links": links, "transport": store}
 
     def _quality(self, now):

@@ -169,3 +169,21 @@ def test_bounded():
     assert len(con._buckets) == BUCKETS and len(con._queued) <= 64
     q = con.view("quality", 3 * BUCKETS * 60000)["buckets"]
     assert len(q) <= BUCKETS
+
+
+def test_the_store_in_the_queue_view():
+    from acomm.transport import Transport
+
+    w, buoy, diver, con, got = ocean()
+    wall = lambda: 1000 + w.now() // 1000  # noqa: E731
+    t = Transport(buoy.node, wall=wall)
+    Transport(diver.node, wall=wall)
+    w.run(30000)
+    pid = t.send(w.now(), "diver", bytes(range(200)), 300, 5)
+    store = con.view("queue", w.now())["transport"]
+    assert [p["pid"] for p in store] == [pid], store
+    p = store[0]
+    assert p["dst"] == "diver" and p["priority"] == 5 and p["cls"] == "p5" and 0 < p["expires_s"] <= 300, p
+    w.run(200000, until=lambda: not t.pending())
+    assert con.view("queue", w.now())["transport"] == [], "delivered: no longer in the store"
+    assert [e for e in con.log if e["cls"] == "data" and e["peer"] == "diver"] == [], "fragments are not messages"
