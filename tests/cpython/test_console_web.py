@@ -205,6 +205,14 @@ def test_password_bad_input_and_the_command_log(served):
         hh = dict(h, **({"Content-Type": "text/plain"} if want == 415 else {}))
         s, _, data = request(port, method, path, body, hh)
         assert s == want and json.loads(data)["error"], (path, body and body[:40], s, data[:200])
+    # requests that are not HTTP
+    for raw in (b"GARBAGE\r\n\r\n", b"GET / HTTP/1.1\r\nContent-Length: many\r\n\r\n", b"\xff\xfe\x00\r\n\r\n",
+                b"GET /" + b"a" * 5000 + b" HTTP/1.1\r\n\r\n"):
+        sk = socket.create_connection(("127.0.0.1", port), 5)
+        sk.sendall(raw)
+        sk.settimeout(5)
+        assert sk.recv(64).startswith(b"HTTP/1.0 400"), raw[:20]
+        sk.close()
     # the node keeps running: a chat line goes out and is delivered
     s, _, data = request(port, "POST", "/api/command", b'{"op": "chat", "dst": "diver", "text": "still here"}', h)
     assert s == 202, data
