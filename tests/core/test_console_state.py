@@ -2,7 +2,8 @@
 # buoy with an X150 USBL and a diver with an X110 modem, real nodes and
 # SeaTrac drivers against emulated beacons. The console listens to the
 # buoy's events; its views and its commands are checked as the web server
-# (acomm_web) would use them, without any web library.
+# (acomm_web) would use them, without any web library; with a network key
+# what the console sends arrives sealed.
 from acomm.apps.console import ALARM_SIZE, BUCKETS, LOG_SIZE, ConsoleState
 from acomm.catalog import caddy
 from acomm.events import EV_RECEIVED
@@ -187,3 +188,21 @@ def test_the_store_in_the_queue_view():
     w.run(200000, until=lambda: not t.pending())
     assert con.view("queue", w.now())["transport"] == [], "delivered: no longer in the store"
     assert [e for e in con.log if e["cls"] == "data" and e["peer"] == "diver"] == [], "fragments are not messages"
+
+
+def test_with_a_network_key_the_console_sends_sealed():
+    from acomm.auth import Auth
+
+    key = bytes(range(32))
+    w, buoy, diver, con, got = ocean()
+    for sn in (buoy, diver):
+        sn.node.set_auth(Auth(key))
+    w.run(60000)
+    assert con.view("info", w.now())["sealed"] is True
+    code, ans = con.command(w.now(), {"op": "chat", "dst": "diver", "text": "sealed line"}, "alice")
+    assert code == 202, ans
+    w.run(30000)
+    rx = [ev for ev in got["diver"] if ev[0] == EV_RECEIVED]
+    assert len(rx) == 1 and rx[0][5] is True, rx  # its tag verified at the diver
+    e = [x for x in con.log if x["req"] == ans["req"]][0]
+    assert e["status"] == "delivered", e
