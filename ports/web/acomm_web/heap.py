@@ -2,8 +2,9 @@
 # after gc.collect): its state's code (acomm.apps.console), microdot, the
 # server module, an empty ConsoleState, the Microdot app with its routes,
 # and the state filled to its bounds (a full log, every alarm slot, an hour
-# of quality buckets). The node and the CADDY catalog are loaded first: the
-# tablet has them anyway.
+# of quality buckets), and then what each open event stream holds once it
+# has sent its first views (web_heap_per_stream; not in the total). The
+# node and the CADDY catalog are loaded first: the tablet has them anyway.
 # Prints one JSON line per figure; `acomm bench web` runs it under the
 # MicroPython unix port (modules from source and as .mpy) and the i386
 # firmware build (acomm frozen in).
@@ -64,8 +65,51 @@ def measure():
     out.append(("web_heap_app", a4 - a4s))
     out.append(("web_heap_state_full", a5 - a4))
     out.append(("web_heap_total", (a3 - a0) + (a5 - a3n)))
+    out.append(("web_heap_per_stream", _per_stream(web)))
     web = state = None
     return out
+
+
+def _per_stream(web, n=2, port=18765):
+    # What each open event stream holds, its first views sent: n streams
+    # opened from this same process, minus n idle connections to the same
+    # server (so the client's own socket objects cancel out).
+    import asyncio
+
+    got = []
+
+    async def open_conns(events):
+        conns = []
+        for _ in range(n):
+            r, w = await asyncio.open_connection("127.0.0.1", port)
+            if events:
+                w.write(b"GET /api/events HTTP/1.1\r\nHost: h\r\n\r\n")
+                await w.drain()
+            conns.append((r, w))
+        await asyncio.sleep(1.5)  # the streams send their first views (the idle ones wait)
+        for r, w in conns:
+            if events:
+                try:
+                    await asyncio.wait_for(r.read(65536), 0.5)
+                except asyncio.TimeoutError:
+                    pass
+        return conns
+
+    async def main():
+        server = asyncio.create_task(web.app.start_server("127.0.0.1", port))
+        await asyncio.sleep(0.3)
+        for events in (False, True):
+            b0 = _used()
+            conns = await open_conns(events)
+            got.append(_used() - b0)
+            for r, w in conns:
+                w.close()
+            await asyncio.sleep(1.0)
+        web.app.shutdown()
+        await server
+
+    asyncio.run(main())
+    return (got[1] - got[0]) // n
 
 
 def main():

@@ -267,6 +267,7 @@ class WebConsole:
                         for n in due:
                             await sse.send(json.dumps(views[n]), event=n)
                             sent[n] = views[n]["version"]
+                        views = None  # not kept through the sleep: a board has 2 streams' worth of heap
                     k += 1
                     await asyncio.sleep(PUSH_S)
                 await sse.send(json.dumps({"reason": "too many event streams: this one was the oldest"}), event="closed")
