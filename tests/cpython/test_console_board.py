@@ -33,7 +33,9 @@ def _diver_cfg():
 
 def test_the_web_field_is_checked():
     cfg = _diver_cfg()
-    assert check(cfg)["web"] is None
+    assert "web" not in check(cfg)
+    cfg["web"] = None
+    assert "web" not in check(cfg)
     cfg["web"] = {"port": 8080}
     w = check(cfg)["web"]
     assert w == {"host": "127.0.0.1", "port": 8080, "password": None, "log_size": 16, "max_streams": 2}, w

@@ -23,7 +23,7 @@
 #                 (driver options)
 #   station       None, or {"report_to", "report_period_s", "alarm_to"}:
 #                 what acomm.station.Station sends by itself
-#   web           None, or {"host" (default loopback), "port" (80),
+#   web           absent, None, or {"host" (default loopback), "port" (80),
 #                 "password", "log_size", "max_streams"}: the operator
 #                 console in a browser (acomm_web.board; docs/console.md),
 #                 for a board with a network; the buoy has none
@@ -218,8 +218,10 @@ def check(cfg):
         sta = s
     out["station"] = sta
     out["auth"] = _auth(cfg.get("auth"))
-    out["web"] = _web(cfg.get("web"))
+    w = _web(cfg.get("web"))
+    if w is not None:  # absent otherwise: the buoy's checked config stays as it was
+        out["web"] = w
     for k in cfg:
-        if k not in out:
+        if k not in out and k != "web":
             _fail("CONFIG", "known fields only", k)
     return out

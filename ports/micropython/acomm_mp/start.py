@@ -80,7 +80,7 @@ def start(config, make_report=None, machine=None):
     if cfg["watchdog_ms"] and hasattr(machine, "WDT"):
         board.wdt = machine.WDT(timeout=cfg["watchdog_ms"])
     print("acomm %s: node %d, links %s" % (cfg["name"], cfg["node_id"], ", ".join(board.node.links)))
-    if cfg["web"] is not None:
+    if cfg.get("web") is not None:
         # the console runs the node in asyncio beside its server; imported
         # by a name the flash closure does not follow: a board gets
         # acomm_web only when its config has `web` (boardfiles.modules)
