@@ -123,11 +123,6 @@ class Discovery:
         e = self._nodes.get(node_id)
         return None if e is None else e[0]
 
-    def period_of(self, node_id):
-        # the advert period (ms) node_id announced, or None
-        e = self._nodes.get(node_id)
-        return None if e is None else e[1]
-
     def available(self):
         return [k for k in self._nodes if self._nodes[k][2] == _AVAILABLE]
 
