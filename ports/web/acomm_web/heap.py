@@ -87,7 +87,7 @@ def _per_stream(web, n=2, port=18765):
                 w.write(b"GET /api/events HTTP/1.1\r\nHost: h\r\n\r\n")
                 await w.drain()
             conns.append((r, w))
-        await asyncio.sleep(1.0)  # the streams send their first views (the idle ones wait)
+        await asyncio.sleep(0.6)  # the streams send their first views (the idle ones wait)
         return conns
 
     async def drain(conns):
@@ -106,15 +106,15 @@ def _per_stream(web, n=2, port=18765):
             # the least of several samples: what the streams hold between
             # their pushes, not a push in flight
             low = None
-            for _ in range(12):
+            for _ in range(8):
                 await drain(conns)
                 u = _used()
                 low = u if low is None or u < low else low
-                await asyncio.sleep(0.2)
+                await asyncio.sleep(0.15)
             got.append(low - b0)
             for r, w in conns:
                 w.close()
-            await asyncio.sleep(1.0)
+            await asyncio.sleep(0.6)
         web.app.shutdown()
         await server
 
