@@ -36,12 +36,15 @@ firmware: $(VENV)/.dev
 # Every runtime runs and prints its own closing line: pytest on CPython,
 # then the core suite on the MicroPython unix port, on the Cortex-M3
 # firmware under qemu and on the i386 build. The target fails if any fails.
+# tools/browser.py installs Debian's chromium for the console's browser
+# test when it is missing and this runs as root (else the test skips).
 # When the firmware cannot be built on this machine (exit 3), its two
 # runtimes are skipped with one line saying how to enable them; a firmware
 # build that fails is a failure.
 I386_HEAP = 2M
 test: $(VENV)/.dev
 	@$(BIN)/python tools/firmware.py build; f=$$?; \
+	$(BIN)/python tools/browser.py; \
 	$(BIN)/python -m pytest -q tests; a=$$?; \
 	PATH="$(CURDIR)/$(BIN):$$PATH" $(BIN)/micropython tools/mp_runtests.py tests/core; b=$$?; \
 	c=0; d=0; \

@@ -18,6 +18,8 @@ package(
     files=[
         "__init__.py",
         "apps/__init__.py",
+        "apps/console.py",
+        "apps/consolecmd.py",
         "apps/imcgateway.py",
         "apps/imcpeers.py",
         "apps/interrogation.py",

@@ -20,7 +20,7 @@ TIMEOUT_S = 20
 
 def tree_env():
     env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([ROOT] + [os.path.join(ROOT, "ports", p) for p in ("cpython", "sim",
+    env["PYTHONPATH"] = os.pathsep.join([ROOT] + [os.path.join(ROOT, "ports", p) for p in ("cpython", "sim", "web",
                                                                                            "micropython")])
     return env
 

@@ -32,6 +32,8 @@ BENCHES = {
     "soak": "soak_workload",
     # an attacker without the key in the demo's ocean (--open: open mode)
     "attack": "attack_workload",
+    # the operator console: the page's size and its MicroPython heap
+    "web": "web_workload",
 }
 NOT_IN_ALL = ("compare", "soak", "attack")
 

@@ -1,9 +1,11 @@
 # What goes on a board: the files `acomm flash` copies, worked out on the
 # host with no device. The module list is a static import closure (ast) of
 # boards/NAME/main.py plus the drivers of the board's modems
-# (acomm_mp.modems.MODEMS: the port imports a driver by name at run time,
+# (acomm.drivers.registry: the port imports a driver by name at run time,
 # which no import scan can see), restricted to the packages acomm and
-# acomm_mp, with every package __init__ on the way. Each module is compiled
+# acomm_mp, with every package __init__ on the way. A board whose config
+# has `web` also gets the operator console: acomm_web's board side, what it
+# imports (acomm.apps.console, microdot) and its page (web_files). Each module is compiled
 # with mpy-cross for the board's MCU (-march from the config's "arch"; the
 # list of arches is acomm_mp.boardconfig.ARCHES) into build/flash/NAME/ARCH/.
 #
@@ -47,9 +49,18 @@ def package_dirs(root=None):
         import acomm
         import acomm_mp
 
-        return {"acomm": os.path.dirname(os.path.abspath(acomm.__file__)),
+        dirs = {"acomm": os.path.dirname(os.path.abspath(acomm.__file__)),
                 "acomm_mp": os.path.dirname(os.path.abspath(acomm_mp.__file__))}
-    return {"acomm": os.path.join(root, "acomm"), "acomm_mp": os.path.join(root, "ports", "micropython", "acomm_mp")}
+    else:
+        dirs = {"acomm": os.path.join(root, "acomm"), "acomm_mp": os.path.join(root, "ports", "micropython", "acomm_mp")}
+    # the console's packages (only a board whose config has `web` imports them)
+    for name in ("acomm_web", "microdot"):
+        try:
+            mod = __import__(name)
+        except ImportError:
+            continue
+        dirs[name] = os.path.dirname(os.path.abspath(mod.__file__))
+    return dirs
 
 
 def in_checkout():
@@ -176,10 +187,37 @@ def closure(entry_files, extra_modules=(), root=None):
 
 
 def modules(board_dir, cfg=None, root=None):
-    """{module name: source path} the board needs: main.py's closure plus its modems' drivers."""
+    """{module name: source path} the board needs: main.py's closure plus its modems' drivers (and its console)."""
     cfg = cfg or load_config(board_dir)
     drivers = sorted(set("acomm.drivers." + lk["modem"] for lk in cfg["links"]))
-    return closure([os.path.join(board_dir, "main.py")], drivers, root)
+    return closure([os.path.join(board_dir, "main.py")], drivers + _web_modules(cfg), root)
+
+
+# a board whose config has `web` (the operator console) gets acomm_web's
+# board side and, through their imports, acomm.apps.console and microdot;
+# its page goes as data (web_files)
+WEB_MODULES = ["acomm_web.board", "acomm_web.server"]
+WEB_DATA = ("page.html", "page.html.gz")
+
+
+def _web_modules(cfg):
+    if not cfg.get("web"):
+        return []
+    try:
+        import microdot  # noqa: F401
+    except ImportError:
+        raise FlashError("the board's config has `web`: the console needs microdot (pip install 'acomm[web]')", 2)
+    return list(WEB_MODULES)
+
+
+def web_files(cfg):
+    """[(device path, host path)] of the console's page, for a board whose config has `web`."""
+    if not cfg.get("web"):
+        return []
+    import acomm_web
+
+    here = os.path.dirname(os.path.abspath(acomm_web.__file__))
+    return [("/lib/acomm_web/" + f, os.path.join(here, f)) for f in WEB_DATA]
 
 
 def _device_rel(name, path):
@@ -231,6 +269,7 @@ def plan(board_dir, arch=None, compile=True, stage_dir=None, root=None):
     mods = modules(board_dir, cfg, root)
     out = [Entry("/" + f, os.path.join(board_dir, f), os.path.getsize(os.path.join(board_dir, f)))
            for f in ("main.py", "config.py")]
+    out += [Entry(d, h, os.path.getsize(h)) for d, h in web_files(cfg)]
     rels = sorted((_device_rel(n, p), p) for n, p in mods.items())
     if not compile:
         out += [Entry("/lib/" + rel, p, os.path.getsize(p)) for rel, p in rels]

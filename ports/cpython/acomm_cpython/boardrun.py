@@ -9,8 +9,9 @@
 # config names is opened as the pyserial port given for it; the console,
 # --json, --log and --store are those of `acomm node`.
 #
-# Left as on the board: the node, its links, drivers, transport, routes and
-# station. Different: no watchdog (a laptop has none), the store is in RAM
+# Left as on the board: the node, its links, drivers, transport, routes,
+# station and console (a `web` field; --web serves it elsewhere, or on a
+# board without the field). Different: no watchdog (a laptop has none), the store is in RAM
 # unless --store DIR (the config's flash path means nothing here), and the
 # loop is the console's.
 
@@ -141,6 +142,7 @@ def main(args):
         wheres[lk["name"]] = (lk["modem"], dev)
         return s
 
+    closers = []
     store_open = None
     if args.store:
         st = cfg["storage"] or {"capacity": 1 << 22, "max_record": 1024}
@@ -162,6 +164,17 @@ def main(args):
         def tick():
             board.tick(ticks_ms())
 
+        w = cfg.get("web")
+        if w is not None and not args.web:
+            # the board's own console field, as on the board
+            args.web = "%s:%d" % (w["host"], w["port"])
+        web, wrap = nodeloop.start_web(args, node, out, w["password"] if w is not None else None)
+        if web is not None:
+            closers.append(web)
+            tick = wrap(tick)
+            # typed lines and the page's commands, one at a time
+            console.command = wrap(console.command)
+            console.poll = wrap(console.poll)
         nodeloop.wait_started(tick, watches, out, args.startup_timeout)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds)
@@ -170,12 +183,17 @@ def main(args):
     except ConfigError as e:
         print("acomm run: board %s: %s" % (name, e), file=sys.stderr)
         return 2
+    except nodeloop.WebError as e:
+        print("acomm run: %s" % e, file=sys.stderr)
+        return e.status
     except (ModemError, AcommError, OSError) as e:
         print("acomm run: %s" % nodeloop.describe(e), file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 0
     finally:
+        for c in closers:
+            c.close()
         for s in streams:
             s.close()
         store = board.transport.store if board is not None else None

@@ -134,6 +134,12 @@ def as_text(d):
             d["open"], "" if d["open"] == 1 else "s")
     if e == "stopped":
         return "stopped%s" % _reason(d)
+    if e == "web_command":
+        a = d["answer"]
+        return "web: %s %s -> %d %s" % (d["by"], json.dumps(d["command"], sort_keys=True), d["code"],
+                                        a.get("error") or json.dumps(a, sort_keys=True))
+    if e == "web":
+        return "console: %s" % d["url"]
     return json.dumps(d)
 
 

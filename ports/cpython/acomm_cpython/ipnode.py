@@ -218,14 +218,22 @@ def main(args):
             os.makedirs(args.inbox, exist_ok=True)
         console = Console(node, transport, out, args.lifespan, args.inbox, wheres)
         node.listen(console.on_event)
-        nodeloop.wait_started(node.step, watches, out, args.startup_timeout)
+        web, wrap = nodeloop.start_web(args, node, out)
+        tick = node.step
+        if web is not None:
+            closers.append(web)
+            tick = wrap(tick)
+            # typed lines, the --send list and the page's commands, one at a time
+            console.command = wrap(console.command)
+            console.poll = wrap(console.poll)
+        nodeloop.wait_started(tick, watches, out, args.startup_timeout)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         pending = [keyval(m) for m in args.send]
 
         def send_pending():
             pending[:] = [m for m in pending if not _send_when_heard(console, node, m[0], m[1])]
 
-        nodeloop.serve(node.step, console, sys.stdin.fileno(), args.seconds, send_pending)
+        nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds, send_pending)
         for dst, _ in pending:
             out.emit({"event": "error", "error": "not sent: %s was never heard" % dst})
         out.emit({"event": "stopped"})
@@ -233,6 +241,9 @@ def main(args):
     except ModemSpecError as e:
         print("acomm node: %s" % e, file=sys.stderr)
         return 2
+    except nodeloop.WebError as e:
+        print("acomm node: %s" % e, file=sys.stderr)
+        return e.status
     except (ModemError, AcommError, OSError) as e:
         print("acomm node: %s" % nodeloop.describe(e), file=sys.stderr)
         return 1

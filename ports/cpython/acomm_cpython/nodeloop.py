@@ -133,6 +133,60 @@ def add_console_arguments(p):
     p.add_argument("--seconds", type=float, help="stop after this long (default: at the end of standard input)")
     p.add_argument("--startup-timeout", type=float, default=15.0, metavar="S",
                    help="seconds a modem has to answer its start-up (default 15)")
+    p.add_argument("--web", metavar="[HOST:]PORT", help="serve the operator console in a browser here "
+                   "(loopback unless a HOST is given; needs the web extra; docs/console.md)")
+    p.add_argument("--web-password-file", metavar="PATH",
+                   help="the console's login password, in a file only its owner reads")
+
+
+class WebError(Exception):
+    """--web cannot be served: status 2 (usage: a bad address, no microdot, a bad password file) or 1."""
+
+    def __init__(self, message, status):
+        Exception.__init__(self, message)
+        self.status = status
+
+
+def start_web(args, node, out, password=None):
+    """--web: the operator console (acomm_web) served beside the node -> (WebHost, tick wrapper) or (None, None).
+
+    The node's listener is teed to the console's state; wrap the loop's
+    tick with the returned function so that the node steps under the lock
+    the server takes. WebError when it cannot be served."""
+    if not getattr(args, "web", None):
+        if getattr(args, "web_password_file", None):
+            raise WebError("--web-password-file goes with --web", 2)
+        return None, None
+    try:
+        from acomm.apps.console import ConsoleState
+        from acomm_web.host import WebHost, parse_web, read_password, tee
+    except ImportError as e:
+        raise WebError("--web needs microdot: pip install 'acomm[web]' (%s)" % e, 2)
+    from acomm.errors import AcommError
+
+    try:
+        host, port = parse_web(args.web)
+        pw = read_password(args.web_password_file) if args.web_password_file else password
+    except (ValueError, AcommError) as e:
+        raise WebError("--web: %s" % e, 2)
+    state = ConsoleState(node, lifespan_s=args.lifespan)
+    tee(node, state)
+    try:
+        web = WebHost(state, host, port, pw, out).start()
+    except OSError as e:
+        raise WebError("--web %s: %s" % (args.web, e.strerror or e), 1)
+    out.emit({"event": "web", "url": web.url})
+
+    def wrap(f):
+        def locked(*a):
+            with web.lock:
+                r = f(*a)
+                state.poll(node.clock())
+            return r
+
+        return locked
+
+    return web, wrap
 
 
 def open_store(path_dir, capacity=1 << 22, max_record=1024):

@@ -23,6 +23,10 @@
 #                 (driver options)
 #   station       None, or {"report_to", "report_period_s", "alarm_to"}:
 #                 what acomm.apps.station.Station sends by itself
+#   web           absent, None, or {"host" (default loopback), "port" (80),
+#                 "password", "log_size", "max_streams"}: the operator
+#                 console in a browser (acomm_web.board; docs/console.md),
+#                 for a board with a network; the buoy has none
 
 from acomm.errors import AcommError
 
@@ -136,6 +140,23 @@ def _auth(a):
     return out
 
 
+def _web(w):
+    # the operator console (acomm_web.board; never loaded without this)
+    if w is None:
+        return None
+    if not isinstance(w, dict):
+        _fail("web", "a dict or None", w)
+    pw = w.get("password")
+    if pw is not None and (not isinstance(pw, str) or not 1 <= len(pw) <= 64):
+        _fail("web.password", "None or a string of 1..64 characters", pw)
+    for k in w:
+        if k not in ("host", "port", "password", "log_size", "max_streams"):
+            _fail("web", "host, port, password, log_size, max_streams", k)
+    return {"host": _str(w, "host", "web.host", 39, "127.0.0.1"), "port": _int(w, "port", 1, 65535, "web.port", 80),
+            "password": pw, "log_size": _int(w, "log_size", 4, 40, "web.log_size", 16),
+            "max_streams": _int(w, "max_streams", 1, 8, "web.max_streams", 2)}
+
+
 def check(cfg):
     if not isinstance(cfg, dict):
         _fail("CONFIG", "a dict", cfg)
@@ -197,7 +218,10 @@ def check(cfg):
         sta = s
     out["station"] = sta
     out["auth"] = _auth(cfg.get("auth"))
+    w = _web(cfg.get("web"))
+    if w is not None:  # absent otherwise: the buoy's checked config stays as it was
+        out["web"] = w
     for k in cfg:
-        if k not in out:
+        if k not in out and k != "web":
             _fail("CONFIG", "known fields only", k)
     return out

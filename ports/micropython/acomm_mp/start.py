@@ -82,7 +82,14 @@ def start(config, make_report=None, machine=None):
     release_builder()  # needed once: the builder's code and the modem table go back to the heap
     if cfg["watchdog_ms"] and hasattr(machine, "WDT"):
         board.wdt = machine.WDT(timeout=cfg["watchdog_ms"])
+    print("acomm %s: node %d, links %s" % (cfg["name"], cfg["node_id"], ", ".join(board.node.links)))
+    if cfg.get("web") is not None:
+        # the console runs the node in asyncio beside its server; imported
+        # by a name the flash closure does not follow: a board gets
+        # acomm_web only when its config has `web` (boardfiles.modules)
+        mod = "acomm_web.board"
+        __import__(mod, None, None, ("serve",)).serve(board, cfg["web"])
+        return
     from .runloop import run_blocking
 
-    print("acomm %s: node %d, links %s" % (cfg["name"], cfg["node_id"], ", ".join(board.node.links)))
     run_blocking(board)

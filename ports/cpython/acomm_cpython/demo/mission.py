@@ -66,7 +66,9 @@ def _fmt(ms):
 
 
 class Mission:
-    def __init__(self, seed=1, minutes=20, say=None, caddy_phase=True):
+    def __init__(self, seed=1, minutes=20, say=None, caddy_phase=True, usbl_noise=None):
+        # usbl_noise: (range m, bearing degrees), the largest error of the
+        # X150s' fixes (uniform); None: exact fixes, as the figures assume
         self.seed = seed
         self.end_ms = int(minutes * 60000)
         self.timeline = []  # (ms, tag, text)
@@ -76,13 +78,16 @@ class Mission:
         self.traffic = Traffic(LINK)
         self.nodes = {}
         for name in (BUOY, DIVER, AUV):
+            emu = {"part": 843 if name == DIVER else 795, "seed": seed * 10 + ADDR[name]}
+            if usbl_noise is not None and name != DIVER:
+                emu["range_noise_m"], emu["bearing_noise_deg"] = usbl_noise
             self.nodes[name] = w.add(
                 name,
                 ADDR[name],
                 "seatrac",
                 position=START[name],
                 mac=Tdma(SLOTS, name, 0, TX_MS[name]),
-                emu_opts={"part": 843 if name == DIVER else 795, "seed": seed * 10 + ADDR[name]},
+                emu_opts=emu,
                 link_opts={"advert_period_ms": 30000, "queue_capacity": 64, "max_retries": 100},
                 listener=self._listener(name),
             )
@@ -99,6 +104,9 @@ class Mission:
         self.answer = None
         self.outage = None
         self._log_shown = 0
+        # on_other(now, node name, src, data): what reaches a node that the
+        # mission did not send (an operator's console, acomm demo --web)
+        self.on_other = None
         self.plan = Timetable()
         self._plan()
         for task in [self.plan, self.vehicle, self.pilot] + self.streams:
@@ -276,6 +284,8 @@ class Mission:
                 self.say(now, "teleop", "auv <- thrust #%d after %.1f s" % (msgs[0][1]["seq"], (now - self.traffic.log.rows[e[0]][6]) / 1000))
             return
         if e is None:
+            if self.on_other is not None:
+                self.on_other(now, me, src, data)
             return
         cls = e[2]
         lat = (now - self.traffic.log.rows[e[0]][6]) / 1000
@@ -306,8 +316,13 @@ class Mission:
                          % ((now - self.log.queued_at) / 1000))
 
     # -- running -----------------------------------------------------------------
-    def run(self):
-        self.world.run(self.end_ms)
+    def run(self, runner=None):
+        # runner(world, end ms): how the World gets there (acomm demo
+        # --web paces it); by default as fast as it can
+        if runner is None:
+            self.world.run(self.end_ms)
+        else:
+            runner(self.world, self.end_ms)
         self.say(self.world.now(), "end", "mission over")
         return self
 

@@ -21,6 +21,9 @@ class Traffic:
         self._by_req = {}  # (node, req_id) -> entry
         self._waiting = {}  # (src, dst, payload) -> [entry, ...] not matched yet
         self._n = 0
+        # watch(node name, request id, dst, data, class, now): every send
+        # (acomm demo --web shows the buoy's in the console's log)
+        self.watch = None
 
     def send(self, sn, dst, data, cls, lifespan_s, priority, ack, now):
         # entry: [pid, on_air_at, cls, final status name or None, received_at]
@@ -31,6 +34,8 @@ class Traffic:
         self.log.sent(pid, cls, "%s>%s" % (sn.name, dst), sn.name, dst, len(data), now)
         self._by_req[(sn.name, rid)] = entry
         self._waiting.setdefault((sn.name, dst, bytes(data)), []).append(entry)
+        if self.watch is not None:
+            self.watch(sn.name, rid, dst, data, cls, now)
         return entry
 
     def status(self, node_name, req_id, status, now):
