@@ -74,8 +74,8 @@ def test_the_tablet_serves_its_console_on_micropython():
     import microdot
 
     port = _free_port()
-    env = dict(os.environ, MICROPYPATH=":".join([".frozen", DIVER, ROOT, ROOT + "/ports/micropython", ROOT + "/ports/web",
-                                                 os.path.dirname(os.path.dirname(microdot.__file__))]))
+    path = [".frozen", DIVER, ROOT] + [ROOT + "/ports/" + p for p in ("micropython", "sim", "web")]
+    env = dict(os.environ, MICROPYPATH=":".join(path + [os.path.dirname(os.path.dirname(microdot.__file__))]))
     p = subprocess.Popen([MP, "-X", "heapsize=2M", os.path.join(ROOT, "tests", "cpython", "fixtures", "board_web_mp.py"),
                           str(port), "4"], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
