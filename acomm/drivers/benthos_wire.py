@@ -1,13 +1,11 @@
-# The Teledyne Benthos ATM-9xx serial dialogue as text: the figures both ends
-# share (rates, addresses, the airtime model), the few line formats that
-# carry values (CLAM setting echoes, the range report, hex payloads), and the
-# readers of the modem's lines and received blocks. Used by
-# the driver (acomm.drivers.benthos) and by the emulator (ports/sim), so both
-# ends agree on every byte; the byte-exact tests against
-# ref/modem-protocols.md section 4.6 keep both honest.
+# The Teledyne Benthos ATM-9xx serial dialogue as text: the figures both ends share (rates, addresses, the
+# airtime model), the few line formats that carry values (CLAM setting echoes, the range report, hex
+# payloads), and the readers of the modem's lines and received blocks. Used by the driver
+# (acomm.drivers.benthos) and by the emulator (ports/sim), so both ends agree on every byte; the byte-exact
+# tests against ref/modem-protocols.md section 4.6 keep both honest.
 #
-# Parsing is by hand (MicroPython's re is too small) and never raises: a
-# parser returns None for a line that does not have its shape.
+# Parsing is by hand (MicroPython's re is too small) and never raises: a parser returns None for a line that
+# does not have its shape.
 
 from ..compat import const
 
