@@ -138,8 +138,11 @@ class SimNode:
 
 
 class World:
-    def __init__(self, seed=1, channel=None, start=0, step_ms=10, max_quiet_ms=100):
+    def __init__(self, seed=1, channel=None, start=0, step_ms=10, max_quiet_ms=100, share_names=True):
         self.clock = ManualClock(start)
+        # every node is told every other's name (False: none, for networks
+        # larger than a node's name table, which then learns from adverts)
+        self.share_names = share_names
         self.channel = channel if channel is not None else Channel(seed=seed, now=start)
         self.seed = seed
         self.step_ms = step_ms
@@ -164,7 +167,7 @@ class World:
         emu, host, dev = self.modem_ends(modem, addr, emu_opts, position)
         sn = SimNode(name, None, None, None, host, dev, addr)
         node = Node(name, node_id, self.clock, listener=listener or sn.events.append)
-        for other in self._order:
+        for other in self._order if self.share_names else ():
             node.names.add(other.name, other.node.node_id)
             other.node.names.add(name, node_id)
         if track is not None:
