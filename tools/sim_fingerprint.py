@@ -24,6 +24,29 @@ def _h(obj):
     return hashlib.sha256(repr(obj).encode()).hexdigest()[:16]
 
 
+def _plain(ev):
+    # an event with its objects (the Link) by type, so the hash has no addresses
+    return tuple(x if isinstance(x, (int, float, str, bytes, type(None))) else type(x).__name__ for x in ev)
+
+
+def _timed_worlds():
+    # every World records its nodes' events with the simulated time at which
+    # they came (appended last, so e[0] is still the event's code)
+    from acomm_sim import world
+
+    class TimedWorld(world.World):
+        def add(self, name, node_id, modem, **kw):
+            if kw.get("listener") is None:
+                box = []
+                kw["listener"] = lambda ev: box.append(_plain(ev) + (self.clock(),))
+                sn = world.World.add(self, name, node_id, modem, **kw)
+                sn.events = box
+                return sn
+            return world.World.add(self, name, node_id, modem, **kw)
+
+    return TimedWorld
+
+
 def demo(seed=1, minutes=20):
     from acomm_cpython.demo import report
     from acomm_cpython.demo.mission import Mission
@@ -51,6 +74,7 @@ def sim_bench():
     from acomm.events import EV_RECEIVED
     from acomm_cpython.workloads import sim_workload as sw
 
+    sw.World = _timed_worlds()
     out = {}
     for kind in ("tdma", "aloha"):
         w, _, pdr = sw.run_once(kind)
@@ -66,6 +90,7 @@ def scale(nodes, sim_s):
 
     if not hasattr(sw, "run_scale"):
         return None
+    sw.World = _timed_worlds()
     w, _, pdr = sw.run_scale(nodes, sim_s)
     return {"nodes": nodes, "pdr": pdr, "collided": w.channel.collided, "delivered": w.channel.delivered,
             "events": _h([(n, sn.events) for n, sn in sorted(w.nodes.items())])}

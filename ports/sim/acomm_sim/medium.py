@@ -36,6 +36,9 @@ class Medium:
         self.delivered = 0
         self.lost = 0
         self.deaf = 0  # lost because the receiver was transmitting
+        # a list to which poll() appends every station it delivered to (the
+        # World wakes their nodes), or None
+        self.receivers = None
 
     def attach(self, addr, station):
         if addr in self._stations and self._stations[addr] is not station:
@@ -142,6 +145,8 @@ class Medium:
                 continue
             self.delivered += 1
             st.receive(end, src, self._damaged(packet), d)
+            if self.receivers is not None:
+                self.receivers.append(st)
 
     def _lost_on_arrival(self, item):
         # what the acoustic channel decides at the receiver (collisions,
@@ -162,3 +167,7 @@ class Medium:
 
     def in_flight(self):
         return len(self._flight)
+
+    def next_arrival(self):
+        # when the next packet's last bit arrives somewhere, or None
+        return self._flight[0][0] if self._flight else None

@@ -24,6 +24,10 @@ PROFILES = {
 
 
 class PacketModemEmulator(SansIO):
+    # idle, it does nothing until the host writes or a packet arrives (the
+    # World lets its node sleep)
+    quiet_until_heard = True
+
     def __init__(self, medium, address, now=0, bitrate=400, overhead=12, fixed_ms=0, mtu=255, queue=8,
                  profile=None):
         SansIO.__init__(self)

@@ -30,6 +30,8 @@
 # their network on the channel and stay off the acoustic medium).
 # Portable Python (the core tests run it on MicroPython too).
 
+import heapq
+
 from acomm.clock import ManualClock
 from acomm.compat import ticks_add, ticks_diff
 from acomm.fakeuart import uart_pair
@@ -103,6 +105,19 @@ def _modem_out(emu, dev):
         dev.write(out)
 
 
+def _index(sn):
+    return sn.index
+
+
+def _node_quiet(now, sn):
+    if not _modem_quiet(now, sn.emu, sn.host_end, sn.modem_end):
+        return False
+    for x in sn.extra:
+        if not _modem_quiet(now, x[2], x[3], x[4]):
+            return False
+    return True
+
+
 def _modem_quiet(now, emu, host, dev):
     # nothing can come of this modem and its line before something else does
     idle = getattr(emu, "idle", None)
@@ -112,6 +127,12 @@ def _modem_quiet(now, emu, host, dev):
         if end.any() or end.in_flight():
             return False
     return True
+
+
+def _sleeps(emu):
+    # an emulator that, once idle, does nothing until bytes come from its
+    # host or the medium delivers a packet to it: its node may sleep
+    return getattr(emu, "quiet_until_heard", False)
 
 
 class SimNode:
@@ -130,6 +151,10 @@ class SimNode:
         self.extra = []
         # one round of the node's work; a board's Board.tick (World.adopt)
         self.step = node.step if node is not None else None
+        self.index = 0  # place in World._order
+        self.asleep = False  # in World._sleeping, not stepped
+        self.sleep_key = None
+        self.can_sleep = False
 
     @property
     def link(self):
@@ -155,6 +180,16 @@ class World:
         self.jumped_ms = 0
         self._tasks = []  # [task, wake]
         self._loose = []  # [emulator, host end, modem end] no node owns
+        # Nodes whose modems are idle and that wait for a wake-up sleep in a
+        # heap of (ms after _base, index, node) and are not visited by the
+        # steps; a packet the channel delivers to their modem, a task, the
+        # wake-up or run() wakes them. The others are _active, in _order.
+        self._active = []
+        self._sorted = True
+        self._sleeping = []
+        self._base = start
+        self._by_station = {}  # id(emulator) -> SimNode
+        self.channel.receivers = []
 
     def now(self):
         return self.clock()
@@ -177,9 +212,16 @@ class World:
         node.add_link(link, MacDriver(driver, mac) if mac is not None else driver, host, **lo)
         sn.node, sn.driver, sn.emu = node, driver, emu
         sn.step = node.step
+        self._join(name, sn)
+        return sn
+
+    def _join(self, name, sn):
+        sn.index = len(self._order)
         self.nodes[name] = sn
         self._order.append(sn)
-        return sn
+        self._by_station[id(sn.emu)] = sn
+        sn.can_sleep = _sleeps(sn.emu)
+        self._active.append(sn)
 
     def add_link(self, name, link, modem, address=None, driver_opts=None, emu_opts=None, link_opts=None):
         # a second (third...) interface for node `name`: e.g. a buoy with a
@@ -194,7 +236,9 @@ class World:
         lo.update(link_opts or {})
         lk = sn.node.add_link(link, driver, host, **lo)
         sn.extra.append([lk, driver, emu, host, dev])
-        sn.wake = None
+        self._by_station[id(emu)] = sn
+        sn.can_sleep = sn.can_sleep and _sleeps(emu)
+        self.wake(sn)
         return lk
 
     def modem_ends(self, modem, address, emu_opts=None, position=None):
@@ -234,8 +278,10 @@ class World:
                 other.node.names.add(name, node.node_id)
         if events is not None:
             sn.events = events
-        self.nodes[name] = sn
-        self._order.append(sn)
+        self._join(name, sn)
+        for x in sn.extra:
+            self._by_station[id(x[2])] = sn
+            sn.can_sleep = sn.can_sleep and _sleeps(x[2])
         return sn
 
     def add_task(self, task):
@@ -254,8 +300,54 @@ class World:
                 ran = True
         if ran:
             # a task may have given any node work: wake them all this step
-            for sn in self._order:
-                sn.wake = None
+            self._wake_all()
+
+    def wake(self, sn):
+        """Steps node `sn` at the next step (after its state was changed from outside)."""
+        sn.wake = None
+        if sn.asleep:
+            sn.asleep = False
+            self._active.append(sn)
+            self._sorted = False
+
+    def _wake_all(self):
+        for sn in self._order:
+            sn.wake = None
+        if self._sleeping:
+            self._active = list(self._order)
+            self._sorted = True
+            for sn in self._active:
+                sn.asleep = False
+            self._sleeping = []
+
+    def _sleep(self, sn, now):
+        # sn.wake is set and its modems are quiet: off the active list
+        if not self._sleeping:
+            self._base = now
+        sn.asleep = True
+        sn.sleep_key = ticks_diff(sn.wake, self._base)
+        heapq.heappush(self._sleeping, (sn.sleep_key, sn.index, sn))
+
+    def _first_sleeper(self):
+        # the sleeping node that wakes first (stale heap entries dropped)
+        h = self._sleeping
+        while h:
+            k, _, sn = h[0]
+            if sn.asleep and sn.sleep_key == k:
+                return sn
+            heapq.heappop(h)
+        return None
+
+    def _wake_due(self, now):
+        # sleeping nodes whose wake-up has come join the active list
+        while True:
+            sn = self._first_sleeper()
+            if sn is None or ticks_diff(now, sn.wake) < 0:
+                return
+            heapq.heappop(self._sleeping)
+            sn.asleep = False
+            self._active.append(sn)
+            self._sorted = False
 
     def _extra_bytes(self, sn):
         for x in sn.extra:
@@ -294,7 +386,13 @@ class World:
         ch = self.channel
         if self._tasks:
             self._run_tasks(now)
-        for sn in self._order:
+        if self._sleeping:
+            self._wake_due(now)
+        if not self._sorted:
+            self._active.sort(key=_index)
+            self._sorted = True
+        active = self._active
+        for sn in active:
             w = sn.wake
             if w is None or ticks_diff(now, w) >= 0 or sn.host_end.any() or self._extra_bytes(sn):
                 sn.step(now)
@@ -308,7 +406,20 @@ class World:
         for e in self._loose:
             _modem_in(now, e[0], e[2])
         ch.poll(now)
-        for sn in self._order:
+        heard = ch.receivers
+        if heard:
+            # a packet reached a sleeping node's modem: its output goes out now
+            for emu in heard:
+                sn = self._by_station.get(id(emu))
+                if sn is not None and sn.asleep:
+                    sn.asleep = False
+                    active.append(sn)
+                    self._sorted = False
+            del heard[:]
+            if not self._sorted:
+                active.sort(key=_index)
+                self._sorted = True
+        for sn in active:
             _modem_out(sn.emu, sn.modem_end)
             for x in sn.extra:
                 _modem_out(x[2], x[4])
@@ -316,12 +427,26 @@ class World:
             _modem_out(e[0], e[2])
         self.clock.advance(self.step_ms)
         self.steps += 1
+        # nodes with a wake-up and quiet modems go to sleep
+        now = self.clock()
+        keep = None
+        for i in range(len(active)):
+            sn = active[i]
+            if sn.can_sleep and sn.wake is not None and _node_quiet(now, sn):
+                if keep is None:
+                    keep = active[:i]
+                self._sleep(sn, now)
+            elif keep is not None:
+                keep.append(sn)
+        if keep is not None:
+            self._active = keep
 
-    def _all_quiet_until(self, now):
-        # When every node sleeps, nothing is on the channel or the lines,
-        # and every emulator says it is idle, nothing can happen before the
-        # earliest wake-up: the clock may jump there. None when it cannot.
-        if self.channel.in_flight():
+    def _all_quiet_until(self, now, flights=False):
+        # When every node sleeps, nothing is on the lines, every emulator
+        # says it is idle and (unless `flights`) nothing is on the channel,
+        # nothing can happen before the earliest wake-up (or arrival): the
+        # clock may jump there. None when it cannot.
+        if self.channel.in_flight() and not flights:
             return None
         first = None
         for t in self._tasks:
@@ -330,42 +455,53 @@ class World:
                 return None
             if first is None or ticks_diff(w, first) < 0:
                 first = w
-        for sn in self._order:
+        for sn in self._active:
             w = sn.wake
             if w is None:
                 return None
-            if not _modem_quiet(now, sn.emu, sn.host_end, sn.modem_end):
+            if not _node_quiet(now, sn):
                 return None
-            for x in sn.extra:
-                if not _modem_quiet(now, x[2], x[3], x[4]):
-                    return None
             if first is None or ticks_diff(w, first) < 0:
                 first = w
         for e in self._loose:
             if not _modem_quiet(now, e[0], e[1], e[2]):
                 return None
+        sn = self._first_sleeper()
+        if sn is not None and (first is None or ticks_diff(sn.wake, first) < 0):
+            first = sn.wake
+        if flights and self.channel.in_flight():
+            a = self.channel.next_arrival()
+            if first is None or ticks_diff(a, first) < 0:
+                first = a
         return first
 
     def run(self, ms, until=None):
         """Runs `ms` of simulated time, or until until() is true (-> True)."""
         end = ticks_add(self.clock(), ms)
-        for sn in self._order:
-            sn.wake = None  # the caller may have given them work
+        self._wake_all()  # the caller may have given them work
         for t in self._tasks:
             t[1] = None
         clk = self.clock
+        ch = self.channel
+        # Without until(), the clock may also jump while packets are on
+        # their way (until() may look at the time of each step)
+        flights = until is None
         while ticks_diff(end, clk()) > 0:
             self.step()
             if until is not None and until():
                 return True
             now = clk()
-            w = self._all_quiet_until(now)
+            w = self._all_quiet_until(now, flights)
             if w is not None:
                 if ticks_diff(w, end) > 0:
                     w = end
                 # stay on the grid of steps
                 k = ticks_diff(w, now) // self.step_ms
                 if k > 0:
+                    if ch.in_flight():
+                        # the steps skipped would each have polled the
+                        # channel with nothing arriving: the last one counts
+                        ch.poll(ticks_add(now, (k - 1) * self.step_ms))
                     clk.advance(k * self.step_ms)
                     self.jumped_ms += k * self.step_ms
         return until is None
