@@ -35,7 +35,8 @@ import heapq
 from acomm.clock import ManualClock
 from acomm.compat import ticks_add, ticks_diff
 from acomm.fakeuart import uart_pair
-from acomm.mac import MacDriver
+from acomm.drivers.transparent import TransparentDriver
+from acomm.mac import MacDriver, Tdma
 from acomm.node import Node
 
 from .channel import Channel
@@ -103,6 +104,10 @@ def _modem_out(emu, dev):
     out = emu.take_output()
     if out:
         dev.write(out)
+
+
+# how many max_quiet_ms an idle node may sleep at most (_idle_wake)
+_IDLE_HORIZON = 4096
 
 
 def _index(sn):
@@ -372,14 +377,51 @@ class World:
             if not d.driver.ready(now):
                 return None
             if not queued:
-                return cap
+                return self._idle_wake(sn, link, now) if isinstance(d.mac, Tdma) else cap
             if d.mac.may_start(now):
                 return None
             wake = d.mac.next_start(now)
             return wake if wake is not None and ticks_diff(wake, cap) < 0 else cap
         if queued or not d.ready(now):
             return None
-        return cap
+        if d.__class__ is MacDriver:
+            d = d.driver
+        return self._idle_wake(sn, link, now) if isinstance(d, TransparentDriver) else cap
+
+    def _idle_wake(self, sn, link, now):
+        # A node stepped again and again every max_quiet_ms with nothing to
+        # do: its next step that does something is the first of those at
+        # which its link is no longer idle (an advert or a peer's loss
+        # falls due). For a node whose steps in between do nothing at all
+        # (one link, no transport, a transparent driver that is ready, an
+        # empty queue, no MAC or TDMA, whose ready() draws nothing) that
+        # step is found here, and the ones before it are skipped: the node
+        # does the same things at the same times. Anything that reaches it
+        # (bytes, a task, run()) wakes it earlier, as before.
+        q = self.max_quiet_ms
+        cap = ticks_add(now, q)
+        node = sn.node
+        if sn.extra or node.transport is not None or sn.step != node.step or len(link.queue):
+            return cap
+        d = link.driver
+        if d.__class__ is MacDriver:
+            if d.mac is not None and not isinstance(d.mac, Tdma):
+                return cap
+            d = d.driver
+        if not isinstance(d, TransparentDriver) or not d.ready(now) or node._pumps.get(link.name) is not None:
+            return cap
+        # link.idle(t) turns False once a timer is due and stays so: search
+        # for the first multiple of q at which it does, up to _IDLE_HORIZON
+        lo, hi = 0, _IDLE_HORIZON
+        if link.idle(ticks_add(now, hi * q)):
+            return ticks_add(now, hi * q)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if link.idle(ticks_add(now, mid * q)):
+                lo = mid
+            else:
+                hi = mid
+        return ticks_add(now, hi * q)
 
     def step(self):
         now = self.clock()
