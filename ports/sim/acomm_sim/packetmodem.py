@@ -76,6 +76,11 @@ class PacketModemEmulator(SansIO):
         # nothing queued, nothing on the air: poll() would do nothing
         return not self._queue and not self.transmitting(now)
 
+    def busy_until(self, now):
+        # until when poll() has nothing to do while it is not idle: the end
+        # of the packet on the air (None: at once)
+        return self._tx_until if self.transmitting(now) else None
+
     def transmitting(self, now):
         return self._tx_until is not None and ticks_diff(now, self._tx_until) < 0
 

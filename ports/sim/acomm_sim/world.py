@@ -36,6 +36,7 @@ from acomm.clock import ManualClock
 from acomm.compat import ticks_add, ticks_diff
 from acomm.fakeuart import uart_pair
 from acomm.drivers.transparent import TransparentDriver
+from acomm.linkrange import SLOT_IDLE
 from acomm.mac import MacDriver, Tdma
 from acomm.node import Node
 
@@ -123,6 +124,29 @@ def _node_quiet(now, sn):
     return True
 
 
+def _sleep_until(now, sn):
+    # When a node that may sleep (World._join) must be visited again: its
+    # own wake-up, or earlier when one of its modems is busy and says until
+    # when its poll has nothing to do (busy_until). None: it may not sleep.
+    w = sn.wake
+    if w is None:
+        return None
+    ends = [(sn.emu, sn.host_end, sn.modem_end)]
+    for x in sn.extra:
+        ends.append((x[2], x[3], x[4]))
+    for emu, host, dev in ends:
+        if host.any() or host.in_flight() or dev.any() or dev.in_flight():
+            return None
+        if emu.idle(now):
+            continue
+        t = emu.busy_until(now)
+        if t is None:
+            return None
+        if ticks_diff(t, w) < 0:
+            w = t
+    return w
+
+
 def _modem_quiet(now, emu, host, dev):
     # nothing can come of this modem and its line before something else does
     idle = getattr(emu, "idle", None)
@@ -159,6 +183,7 @@ class SimNode:
         self.index = 0  # place in World._order
         self.asleep = False  # in World._sleeping, not stepped
         self.sleep_key = None
+        self.sleep_wake = None  # when it joins the active list again
         self.can_sleep = False
 
     @property
@@ -325,12 +350,13 @@ class World:
                 sn.asleep = False
             self._sleeping = []
 
-    def _sleep(self, sn, now):
-        # sn.wake is set and its modems are quiet: off the active list
+    def _sleep(self, sn, now, until):
+        # off the active list until `until` (or a packet, a task, run())
         if not self._sleeping:
             self._base = now
         sn.asleep = True
-        sn.sleep_key = ticks_diff(sn.wake, self._base)
+        sn.sleep_wake = until
+        sn.sleep_key = ticks_diff(until, self._base)
         heapq.heappush(self._sleeping, (sn.sleep_key, sn.index, sn))
 
     def _first_sleeper(self):
@@ -347,7 +373,7 @@ class World:
         # sleeping nodes whose wake-up has come join the active list
         while True:
             sn = self._first_sleeper()
-            if sn is None or ticks_diff(now, sn.wake) < 0:
+            if sn is None or ticks_diff(now, sn.sleep_wake) < 0:
                 return
             heapq.heappop(self._sleeping)
             sn.asleep = False
@@ -369,7 +395,7 @@ class World:
                 return None
         link = sn.link
         if not link.idle(now):
-            return None
+            return self._busy_wake(sn, link, now)
         d = link.driver
         queued = len(link.queue)
         cap = ticks_add(now, self.max_quiet_ms)
@@ -387,6 +413,27 @@ class World:
         if d.__class__ is MacDriver:
             d = d.driver
         return self._idle_wake(sn, link, now) if isinstance(d, TransparentDriver) else cap
+
+    def _busy_wake(self, sn, link, now):
+        # A link sending over a transparent driver is stepped at every step
+        # until the modem's airtime has passed (the driver's _busy_until).
+        # With nothing queued, no acknowledgement awaited and no peer to be
+        # declared lost before then, those steps do nothing: the node's next
+        # step is then. Otherwise None (the next step), as before.
+        node = sn.node
+        if sn.extra or node.transport is not None or sn.step != node.step or len(link.queue):
+            return None
+        d = link.driver
+        if d.__class__ is MacDriver:
+            d = d.driver  # a MAC is not asked while the link sends
+        if not isinstance(d, TransparentDriver) or d.ready(now) or node._pumps.get(link.name) is not None:
+            return None
+        if link._fl.state == SLOT_IDLE or len(link._acks):
+            return None
+        t = d._busy_until
+        if ticks_diff(t, now) <= 0 or link.discovery.loss_due(t):
+            return None
+        return t
 
     def _idle_wake(self, sn, link, now):
         # A node stepped again and again every max_quiet_ms with nothing to
@@ -474,10 +521,11 @@ class World:
         keep = None
         for i in range(len(active)):
             sn = active[i]
-            if sn.can_sleep and sn.wake is not None and _node_quiet(now, sn):
+            until = _sleep_until(now, sn) if sn.can_sleep else None
+            if until is not None:
                 if keep is None:
                     keep = active[:i]
-                self._sleep(sn, now)
+                self._sleep(sn, now, until)
             elif keep is not None:
                 keep.append(sn)
         if keep is not None:
@@ -509,8 +557,8 @@ class World:
             if not _modem_quiet(now, e[0], e[1], e[2]):
                 return None
         sn = self._first_sleeper()
-        if sn is not None and (first is None or ticks_diff(sn.wake, first) < 0):
-            first = sn.wake
+        if sn is not None and (first is None or ticks_diff(sn.sleep_wake, first) < 0):
+            first = sn.sleep_wake
         if flights and self.channel.in_flight():
             a = self.channel.next_arrival()
             if first is None or ticks_diff(a, first) < 0:
