@@ -407,12 +407,60 @@ class World:
             if d.mac.may_start(now):
                 return None
             wake = d.mac.next_start(now)
-            return wake if wake is not None and ticks_diff(wake, cap) < 0 else cap
+            if wake is not None and ticks_diff(wake, cap) < 0:
+                return wake
+            if wake is not None and isinstance(d.mac, Tdma):
+                w = self._slot_wake(sn, link, now, wake)
+                if w is not None:
+                    return w
+            return cap
         if queued or not d.ready(now):
             return None
         if d.__class__ is MacDriver:
             d = d.driver
         return self._idle_wake(sn, link, now) if isinstance(d, TransparentDriver) else cap
+
+    def _plain(self, sn, link):
+        # the node's transparent driver when the node is one plain link
+        # (no other links, no transport, its own step, no frame pump),
+        # else None: the only nodes whose empty steps _idle_wake,
+        # _slot_wake and _busy_wake know to skip
+        node = sn.node
+        if sn.extra or node.transport is not None or sn.step != node.step:
+            return None
+        if node._pumps.get(link.name) is not None:
+            return None
+        d = link.driver
+        if d.__class__ is MacDriver:
+            d = d.driver
+        return d if isinstance(d, TransparentDriver) else None
+
+    def _slot_wake(self, sn, link, now, start):
+        # A node with frames queued for its TDMA slot (at `start`, beyond
+        # max_quiet_ms) is stepped every max_quiet_ms until then; those
+        # steps do nothing (a TDMA ready() draws nothing) unless a queued
+        # frame's lifespan ends or a peer falls due to be declared lost.
+        # -> the first of those steps at which a frame expires, else
+        # `start`; None when a loss may fall due before (stepped as before).
+        d = self._plain(sn, link)
+        if d is None or not d.ready(now):
+            return None
+        q = self.max_quiet_ms
+        m = ticks_diff(start, now) // q  # the steps at now + k * q, k = 1..m
+        first = None
+        for req in link.queue:
+            if first is None or ticks_diff(req.deadline, first) < 0:
+                first = req.deadline
+        w = start
+        if first is not None and ticks_diff(start, first) >= 0:
+            k = (ticks_diff(first, now) + q - 1) // q
+            if k < 1:
+                k = 1
+            if k <= m:
+                w = ticks_add(now, k * q)
+        if link.discovery.loss_due(w):
+            return None
+        return w
 
     def _busy_wake(self, sn, link, now):
         # A link sending over a transparent driver is stepped at every step
@@ -420,13 +468,8 @@ class World:
         # With nothing queued, no acknowledgement awaited and no peer to be
         # declared lost before then, those steps do nothing: the node's next
         # step is then. Otherwise None (the next step), as before.
-        node = sn.node
-        if sn.extra or node.transport is not None or sn.step != node.step or len(link.queue):
-            return None
-        d = link.driver
-        if d.__class__ is MacDriver:
-            d = d.driver  # a MAC is not asked while the link sends
-        if not isinstance(d, TransparentDriver) or d.ready(now) or node._pumps.get(link.name) is not None:
+        d = self._plain(sn, link)  # a MAC is not asked while the link sends
+        if d is None or len(link.queue) or d.ready(now):
             return None
         if link._fl.state == SLOT_IDLE or len(link._acks):
             return None
@@ -447,15 +490,11 @@ class World:
         # (bytes, a task, run()) wakes it earlier, as before.
         q = self.max_quiet_ms
         cap = ticks_add(now, q)
-        node = sn.node
-        if sn.extra or node.transport is not None or sn.step != node.step or len(link.queue):
-            return cap
         d = link.driver
-        if d.__class__ is MacDriver:
-            if d.mac is not None and not isinstance(d.mac, Tdma):
-                return cap
-            d = d.driver
-        if not isinstance(d, TransparentDriver) or not d.ready(now) or node._pumps.get(link.name) is not None:
+        if d.__class__ is MacDriver and d.mac is not None and not isinstance(d.mac, Tdma):
+            return cap
+        d = self._plain(sn, link)
+        if d is None or len(link.queue) or not d.ready(now):
             return cap
         # link.idle(t) turns False once a timer is due and stays so: search
         # for the first multiple of q at which it does, up to _IDLE_HORIZON
