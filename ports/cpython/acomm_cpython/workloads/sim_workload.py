@@ -20,6 +20,15 @@
 #   caddy_cycle_propagation_s    sound's way out and back in the four pairs,
 #                                which the seed's budget leaves out
 #   caddy_cycle_seen_*           the same with the diver in sonar (7.64 s)
+#
+# And the scale runs (scale_world below): 16, 64 and 256 nodes with the same
+# load per node, five simulated minutes each:
+#   sim_cost_<n>_nodes           wall ms per simulated second
+#   sim_heard_per_frame_<n>_nodes  copies of a frame delivered, on average
+#   sim_cost_ratio_64_vs_16, sim_cost_ratio_256_vs_64   their ratios (4 is
+#                                linear in the number of nodes)
+#   sim_memory_256_nodes         tracemalloc's peak while building the
+#                                256-node world and running it a minute
 import time
 
 from acomm.mac import Aloha, Tdma
@@ -72,7 +81,8 @@ def run_once(kind, seed=1):
 # stay distinct). Names are not shared (a node's table holds 64).
 SCALE_SPACING_M = 400.0
 SCALE_LOSS_CURVE = ((0.0, 0.02), (400.0, 0.05), (600.0, 0.3), (601.0, 1.0))
-SCALE_SIM_S = 600
+SCALE_SIM_S = 300
+SCALE_NODES = (16, 64, 256)
 
 
 def scale_world(nodes, seed=1):
@@ -162,9 +172,22 @@ def run_caddy(emit):
         emit("caddy_timeouts%s" % tag, sum(c["timeouts"] for c in cyc.counters), "steps")
 
 
+def run_scales(emit):
+    cost = {}
+    for n in SCALE_NODES:
+        w, wall, heard = run_scale(n)
+        cost[n] = wall * 1000 / SCALE_SIM_S
+        emit("sim_cost_%d_nodes" % n, cost[n], "ms/s")
+        emit("sim_heard_per_frame_%d_nodes" % n, heard, "copies")
+    emit("sim_cost_ratio_64_vs_16", cost[64] / cost[16], "ratio")
+    emit("sim_cost_ratio_256_vs_64", cost[256] / cost[64], "ratio")
+    emit("sim_memory_256_nodes", scale_memory(256), "B")
+
+
 def run(emit):
     w, wall, pdr = run_once("tdma")
     emit("sim_speedup_16_nodes", SIM_S / wall, "x")
+    run_scales(emit)
     emit("tdma_collisions", w.channel.collided, "copies")
     emit("tdma_pdr", pdr, "ratio")
     w, wall, pdr = run_once("aloha")
