@@ -32,8 +32,10 @@ BENCHES = {
     "soak": "soak_workload",
     # an attacker without the key in the demo's ocean (--open: open mode)
     "attack": "attack_workload",
+    # a sweep in one process and on 2 Dask workers (needs the sweep extra)
+    "sweep": "sweep_workload",
 }
-NOT_IN_ALL = ("compare", "soak", "attack")
+NOT_IN_ALL = ("compare", "soak", "attack", "sweep")
 
 
 def find_micropython():
