@@ -193,8 +193,12 @@ class SimNode:
 
 
 class World:
-    def __init__(self, seed=1, channel=None, start=0, step_ms=10, max_quiet_ms=100, share_names=True):
+    def __init__(self, seed=1, channel=None, start=0, step_ms=10, max_quiet_ms=100, share_names=True, fast=True):
         self.clock = ManualClock(start)
+        # fast: nodes sleep and the clock jumps whenever that changes nothing
+        # (the figures are the same; False visits every node at every step
+        # it would have been visited before, for tests that check just that)
+        self.fast = fast
         # every node is told every other's name (False: none, for networks
         # larger than a node's name table, which then learns from adverts)
         self.share_names = share_names
@@ -250,7 +254,7 @@ class World:
         self.nodes[name] = sn
         self._order.append(sn)
         self._by_station[id(sn.emu)] = sn
-        sn.can_sleep = _sleeps(sn.emu)
+        sn.can_sleep = self.fast and _sleeps(sn.emu)
         self._active.append(sn)
 
     def add_link(self, name, link, modem, address=None, driver_opts=None, emu_opts=None, link_opts=None):
@@ -395,7 +399,7 @@ class World:
                 return None
         link = sn.link
         if not link.idle(now):
-            return self._busy_wake(sn, link, now)
+            return self._busy_wake(sn, link, now) if self.fast else None
         d = link.driver
         queued = len(link.queue)
         cap = ticks_add(now, self.max_quiet_ms)
@@ -403,13 +407,13 @@ class World:
             if not d.driver.ready(now):
                 return None
             if not queued:
-                return self._idle_wake(sn, link, now) if isinstance(d.mac, Tdma) else cap
+                return self._idle_wake(sn, link, now) if self.fast and isinstance(d.mac, Tdma) else cap
             if d.mac.may_start(now):
                 return None
             wake = d.mac.next_start(now)
             if wake is not None and ticks_diff(wake, cap) < 0:
                 return wake
-            if wake is not None and isinstance(d.mac, Tdma):
+            if wake is not None and self.fast and isinstance(d.mac, Tdma):
                 w = self._slot_wake(sn, link, now, wake)
                 if w is not None:
                     return w
@@ -418,7 +422,7 @@ class World:
             return None
         if d.__class__ is MacDriver:
             d = d.driver
-        return self._idle_wake(sn, link, now) if isinstance(d, TransparentDriver) else cap
+        return self._idle_wake(sn, link, now) if self.fast and isinstance(d, TransparentDriver) else cap
 
     def _plain(self, sn, link):
         # the node's transparent driver when the node is one plain link
@@ -614,7 +618,7 @@ class World:
         ch = self.channel
         # Without until(), the clock may also jump while packets are on
         # their way (until() may look at the time of each step)
-        flights = until is None
+        flights = until is None and self.fast
         while ticks_diff(end, clk()) > 0:
             self.step()
             if until is not None and until():
