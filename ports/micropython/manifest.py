@@ -32,6 +32,7 @@ package(
         "clock.py",
         "codec/__init__.py",
         "codec/fields.py",
+        "codec/flat.py",
         "codec/message.py",
         "codec/text6.py",
         "compat.py",

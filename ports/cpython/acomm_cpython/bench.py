@@ -19,6 +19,9 @@ BENCHES = {
     "queue": "queue_workload",
     "discovery": "discovery_workload",
     "codec": "codec_workload",
+    # encode + decode of the teleop command and the CADDY diver status, per
+    # runtime, where the time goes, and against cbor2 and ltcodecs
+    "encode": "encode_workload",
     "fec": "fec_workload",
     "sim": "sim_workload",
     "teleop": "teleop_workload",

@@ -27,6 +27,7 @@ package(
         "catalog/teleop.py",
         "codec/__init__.py",
         "codec/fields.py",
+        "codec/flat.py",
         "codec/message.py",
         "codec/text6.py",
         "compat.py",

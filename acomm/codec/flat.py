@@ -1,0 +1,117 @@
+# The fast path of a Message whose fields are all flat: scalars (UInt,
+# Fixed, Enum, Bool, Wide of at most 24 bits) or Optional scalars. Encode
+# gathers the codes of several fields into one small int and writes it at
+# once; decode reads the body of an all-scalar message in groups of fields
+# of at most 24 bits and splits each group by shifts. Same bits, values and
+# errors (with the same field paths) as the fields' own encode and decode,
+# which Message uses when this path does not apply. Ints stay under 30
+# bits, so a 32-bit MicroPython port never allocates for them.
+
+from ..errors import DecodeError, EncodeError
+from .fields import Optional, Scalar, fail, pathed
+
+_MAX_FIELD = 24  # bits of one field on this path
+_MAX_ACC = 29  # bits gathered before a write
+
+
+def plan(fields):
+    """-> ((name, scalar, optional, bits), ...) for flat fields, else None."""
+    out = []
+    for f in fields:
+        opt = isinstance(f, Optional)
+        s = f.field if opt else f
+        if not isinstance(s, Scalar) or type(s).encode is not Scalar.encode or type(s).decode is not Scalar.decode:
+            return None
+        if s.bits > _MAX_FIELD:
+            return None
+        out.append((s.name, s, opt, s.bits))
+    return tuple(out)
+
+
+def groups(p):
+    """-> ((group bits, ((name, scalar, shift, mask), ...)), ...) for an all-scalar plan, else None."""
+    out = []
+    cur = []
+    n = 0
+    for name, s, opt, bits in p:
+        if opt:
+            return None
+        if n + bits > _MAX_FIELD and cur:
+            out.append((n, _shifts(cur, n)))
+            cur = []
+            n = 0
+        cur.append((name, s, bits))
+        n += bits
+    if cur:
+        out.append((n, _shifts(cur, n)))
+    return tuple(out)
+
+
+def _shifts(cur, n):
+    out = []
+    for name, s, bits in cur:
+        n -= bits
+        out.append((name, s, n, (1 << bits) - 1))
+    return tuple(out)
+
+
+def encode(w, values, p):
+    """Writes the body; the errors of Message.encode_body, with their paths."""
+    acc = 0
+    n = 0
+    name = None
+    try:
+        for name, s, opt, bits in p:
+            v = values[name]
+            if n + bits >= _MAX_ACC:
+                w.write(acc, n)
+                acc = 0
+                n = 0
+            if opt:
+                if v is None:
+                    acc <<= 1
+                    n += 1
+                    continue
+                acc = (acc << 1) | 1
+                n += 1
+            acc = (acc << bits) | s.code(v)
+            n += bits
+    except EncodeError as e:
+        raise pathed(e, name) from None
+    except KeyError:
+        raise fail(EncodeError, "missing", name) from None
+    except (TypeError, ValueError, AttributeError, IndexError):
+        if name is None or not isinstance(values, dict):
+            raise fail(EncodeError, "values must be a dict, not %s" % type(values).__name__) from None
+        raise fail(EncodeError, "bad value %r" % (values.get(name),), name) from None
+    if n:
+        w.write(acc, n)
+
+
+def decode(r, p, gs, out):
+    """Fills out with the body's values; the errors of Message.decode_body.
+
+    gs (groups(p)) only when at least the message's bits remain: a short
+    body then fails at the same field as field by field."""
+    if gs is not None:
+        for n, fs in gs:
+            v = r.read(n)
+            for name, s, shift, mask in fs:
+                c = (v >> shift) & mask
+                if c >= s.ncodes:
+                    raise fail(DecodeError, "code %d past the last %d" % (c, s.ncodes - 1), name)
+                out[name] = s.value(c)
+        return out
+    name = None
+    try:
+        for name, s, opt, bits in p:
+            if opt and not r.read(1):
+                out[name] = None
+                continue
+            c = r.read(bits)
+            if c >= s.ncodes:
+                raise fail(DecodeError, "code %d past the last %d" % (c, s.ncodes - 1))
+            out[name] = s.value(c)
+    except DecodeError as e:
+        raise pathed(e, name) from None
+    return out
