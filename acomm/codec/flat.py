@@ -7,11 +7,16 @@
 # which Message uses when this path does not apply. Ints stay under 30
 # bits, so a 32-bit MicroPython port never allocates for them.
 
+import sys
+
 from ..errors import DecodeError, EncodeError
 from .fields import Optional, Scalar, fail, pathed
 
 _MAX_FIELD = 24  # bits of one field on this path
 _MAX_ACC = 29  # bits gathered before a write
+# a whole frame held in one int (pack_one, unpack_one) up to this many bits:
+# a small int on 64-bit ports (no allocation), 30 bits on 32-bit boards
+_WHOLE = 62 if sys.maxsize > (1 << 32) else 30
 
 
 def plan(fields):
@@ -86,6 +91,66 @@ def encode(w, values, p):
         raise fail(EncodeError, "bad value %r" % (values.get(name),), name) from None
     if n:
         w.write(acc, n)
+
+
+def pack_one(msg_id, id_bits, values, p, max_bits):
+    """One message's frame (id + body, zero-padded) -> bytes, or None when
+    it may be longer than _WHOLE bits; the errors of Message.encode_body."""
+    if id_bits + max_bits > _WHOLE:
+        return None
+    acc = msg_id
+    n = id_bits
+    name = None
+    try:
+        for name, s, opt, bits in p:
+            v = values[name]
+            if opt:
+                if v is None:
+                    acc <<= 1
+                    n += 1
+                    continue
+                acc = (acc << 1) | 1
+                n += 1
+            acc = (acc << bits) | s.code(v)
+            n += bits
+    except EncodeError as e:
+        raise pathed(e, name) from None
+    except KeyError:
+        raise fail(EncodeError, "missing", name) from None
+    except (TypeError, ValueError, AttributeError, IndexError):
+        if name is None or not isinstance(values, dict):
+            raise fail(EncodeError, "values must be a dict, not %s" % type(values).__name__) from None
+        raise fail(EncodeError, "bad value %r" % (values.get(name),), name) from None
+    pad = (8 - (n & 7)) & 7
+    return (acc << pad).to_bytes((n + pad) >> 3, "big")
+
+
+def unpack_one(by_id, id_bits, buf, nbits):
+    """[(message, values)] when buf holds exactly one message of scalars
+    and its zero padding, all of it right; None otherwise (the caller
+    decodes field by field, and so raises what it raises)."""
+    total = len(buf) * 8
+    if total > _WHOLE + 8 or total < 8:
+        return None
+    nb = total if nbits is None else nbits
+    if nb < id_bits or nb > total:
+        return None
+    v = int.from_bytes(bytes(buf), "big") >> (total - nb)
+    m = by_id.get(v >> (nb - id_bits))
+    if m is None or not m._flat or m._groups is None:
+        return None
+    rem = nb - id_bits - m.max_bits
+    if rem < 0 or rem >= 8 or v & ((1 << rem) - 1):
+        return None
+    shift = nb - id_bits
+    out = {}
+    for name, s, _, bits in m._flat:
+        shift -= bits
+        c = (v >> shift) & ((1 << bits) - 1)
+        if c >= s.ncodes:
+            return None
+        out[name] = s.value(c)
+    return [(m, out)]
 
 
 def decode(r, p, gs, out):

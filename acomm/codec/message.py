@@ -197,6 +197,20 @@ class Catalog:
     def pack(self, items):
         """[(message, values dict), ...] -> bytes; EncodeError for a value outside its field."""
         items = list(items)
+        if len(items) == 1:
+            # one message of flat fields: the frame as one int (codec.flat)
+            m, values = items[0]
+            m = self._get(m)
+            p = m._flat
+            if p is False:
+                p = m._fast()
+            if p is not None:
+                try:
+                    out = _flat.pack_one(m.msg_id, self.id_bits, values, p, m.max_bits)
+                except EncodeError as e:
+                    raise _top(e, m.name) from None
+                if out is not None:
+                    return out
         need = 0
         for m, _ in items:
             need += self.bits(m)
@@ -209,6 +223,11 @@ class Catalog:
         # Messages until only zero padding is left: fewer than 8 bits, all
         # zero. Anything else must parse as id + body; when it does not, the
         # DecodeError's `messages` holds what was decoded before it.
+        if _flat is not None:
+            # a frame of one message of scalars, planned (codec.flat)
+            one = _flat.unpack_one(self._by_id, self.id_bits, buf, nbits)
+            if one is not None:
+                return one
         r = BitReader(buf, nbits)
         out = []
         while True:

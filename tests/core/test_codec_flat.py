@@ -84,6 +84,11 @@ def test_fast_path_gives_the_same_bytes_values_and_errors():
                     for nbits in (cut * 8, max(0, cut * 8 - 3)):
                         x, y = _both(m, lambda: cat.unpack(wire[:cut], nbits))
                         assert x == y, (m.name, cut, nbits, x, y)
+            # random frames: unpack's fast path for one message, or not
+            for n in (1, len(body) + 1, len(body) + 2):
+                junk = bytes([m.msg_id << (8 - cat.id_bits) & 0xFF]) + rng.bytes(n - 1)
+                x, y = _both(m, lambda: cat.unpack(junk))
+                assert x == y, (m.name, junk, x, y)
             checked += 1
         # a writer too small for the message: field by field, same error
         zero = m.decode_from(BitReader(bytes(nbytes)))
