@@ -135,22 +135,31 @@ def unpack_one(by_id, id_bits, buf, nbits):
     nb = total if nbits is None else nbits
     if nb < id_bits or nb > total:
         return None
-    v = int.from_bytes(bytes(buf), "big") >> (total - nb)
+    v = int.from_bytes(buf, "big") >> (total - nb)
     m = by_id.get(v >> (nb - id_bits))
     if m is None or not m._flat or m._groups is None:
         return None
     rem = nb - id_bits - m.max_bits
     if rem < 0 or rem >= 8 or v & ((1 << rem) - 1):
         return None
-    shift = nb - id_bits
     out = {}
-    for name, s, _, bits in m._flat:
-        shift -= bits
-        c = (v >> shift) & ((1 << bits) - 1)
+    for name, s, off, mask in m._whole:
+        c = (v >> (rem + off)) & mask
         if c >= s.ncodes:
             return None
         out[name] = s.value(c)
     return [(m, out)]
+
+
+def whole(p):
+    """-> ((name, scalar, bits after it, mask), ...) of an all-scalar plan."""
+    out = []
+    off = 0
+    for name, s, _, bits in reversed(p):
+        out.append((name, s, off, (1 << bits) - 1))
+        off += bits
+    out.reverse()
+    return tuple(out)
 
 
 def decode(r, p, gs, out):

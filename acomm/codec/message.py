@@ -67,6 +67,8 @@ class Message:
         if p is False:
             p = self._flat = _flat.plan(self.fields)
             self._groups = _flat.groups(p) if p is not None else None
+            if self._groups is not None:
+                self._whole = _flat.whole(p)
         return p
 
     def encode_body(self, w, values):
