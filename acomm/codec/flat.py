@@ -126,9 +126,9 @@ def pack_one(msg_id, id_bits, values, p, max_bits):
 
 
 def unpack_one(by_id, id_bits, buf, nbits):
-    """[(message, values)] when buf holds exactly one message of scalars
-    and its zero padding, all of it right; None otherwise (the caller
-    decodes field by field, and so raises what it raises)."""
+    """[(message, values)] when buf holds exactly one flat message and its
+    zero padding, all of it right; None otherwise (the caller decodes field
+    by field, and so raises what it raises)."""
     total = len(buf) * 8
     if total > _WHOLE + 8 or total < 8:
         return None
@@ -137,8 +137,10 @@ def unpack_one(by_id, id_bits, buf, nbits):
         return None
     v = int.from_bytes(buf, "big") >> (total - nb)
     m = by_id.get(v >> (nb - id_bits))
-    if m is None or not m._flat or m._groups is None:
+    if m is None or not m._flat:
         return None
+    if m._groups is None:
+        return _unpack_optionals(m, v, nb - id_bits)
     rem = nb - id_bits - m.max_bits
     if rem < 0 or rem >= 8 or v & ((1 << rem) - 1):
         return None
@@ -148,6 +150,29 @@ def unpack_one(by_id, id_bits, buf, nbits):
         if c >= s.ncodes:
             return None
         out[name] = s.value(c)
+    return [(m, out)]
+
+
+def _unpack_optionals(m, v, shift):
+    # the same for a body with optional fields: positions found as it goes
+    out = {}
+    for name, s, opt, bits in m._flat:
+        if opt:
+            shift -= 1
+            if shift < 0:
+                return None
+            if not (v >> shift) & 1:
+                out[name] = None
+                continue
+        shift -= bits
+        if shift < 0:
+            return None
+        c = (v >> shift) & ((1 << bits) - 1)
+        if c >= s.ncodes:
+            return None
+        out[name] = s.value(c)
+    if shift >= 8 or v & ((1 << shift) - 1):
+        return None
     return [(m, out)]
 
 

@@ -80,6 +80,10 @@ def test_fast_path_gives_the_same_bytes_values_and_errors():
                         assert x == y, (m.name, bad, x, y)
                 # short bodies: every length fails (or not) at the same field
                 wire = cat.pack([(m, good)])
+                # the same frame with its last bit set (padding, or not)
+                odd = wire[:-1] + bytes([wire[-1] | 1]) if wire else b"\x01"
+                x, y = _both(m, lambda: cat.unpack(odd))
+                assert x == y, (m.name, odd, x, y)
                 for cut in range(len(wire) + 1):
                     for nbits in (cut * 8, max(0, cut * 8 - 3)):
                         x, y = _both(m, lambda: cat.unpack(wire[:cut], nbits))
