@@ -36,10 +36,10 @@ from acomm.clock import ManualClock
 from acomm.compat import ticks_add, ticks_diff
 from acomm.fakeuart import uart_pair
 from acomm.drivers.transparent import TransparentDriver
-from acomm.linkrange import SLOT_IDLE
 from acomm.mac import MacDriver, Tdma
 from acomm.node import Node
 
+from . import idlesteps
 from .channel import Channel
 
 
@@ -105,10 +105,6 @@ def _modem_out(emu, dev):
     out = emu.take_output()
     if out:
         dev.write(out)
-
-
-# how many max_quiet_ms an idle node may sleep at most (_idle_wake)
-_IDLE_HORIZON = 4096
 
 
 def _index(sn):
@@ -399,7 +395,7 @@ class World:
                 return None
         link = sn.link
         if not link.idle(now):
-            return self._busy_wake(sn, link, now) if self.fast else None
+            return idlesteps.busy_wake(sn, link, now) if self.fast else None
         d = link.driver
         queued = len(link.queue)
         cap = ticks_add(now, self.max_quiet_ms)
@@ -407,14 +403,14 @@ class World:
             if not d.driver.ready(now):
                 return None
             if not queued:
-                return self._idle_wake(sn, link, now) if self.fast and isinstance(d.mac, Tdma) else cap
+                return idlesteps.idle_wake(sn, link, now, self.max_quiet_ms) if self.fast and isinstance(d.mac, Tdma) else cap
             if d.mac.may_start(now):
                 return None
             wake = d.mac.next_start(now)
             if wake is not None and ticks_diff(wake, cap) < 0:
                 return wake
             if wake is not None and self.fast and isinstance(d.mac, Tdma):
-                w = self._slot_wake(sn, link, now, wake)
+                w = idlesteps.slot_wake(sn, link, now, wake, self.max_quiet_ms)
                 if w is not None:
                     return w
             return cap
@@ -422,96 +418,7 @@ class World:
             return None
         if d.__class__ is MacDriver:
             d = d.driver
-        return self._idle_wake(sn, link, now) if self.fast and isinstance(d, TransparentDriver) else cap
-
-    def _plain(self, sn, link):
-        # the node's transparent driver when the node is one plain link
-        # (no other links, no transport, its own step, no frame pump),
-        # else None: the only nodes whose empty steps _idle_wake,
-        # _slot_wake and _busy_wake know to skip
-        node = sn.node
-        if sn.extra or node.transport is not None or sn.step != node.step:
-            return None
-        if node._pumps.get(link.name) is not None:
-            return None
-        d = link.driver
-        if d.__class__ is MacDriver:
-            d = d.driver
-        return d if isinstance(d, TransparentDriver) else None
-
-    def _slot_wake(self, sn, link, now, start):
-        # A node with frames queued for its TDMA slot (at `start`, beyond
-        # max_quiet_ms) is stepped every max_quiet_ms until then; those
-        # steps do nothing (a TDMA ready() draws nothing) unless a queued
-        # frame's lifespan ends or a peer falls due to be declared lost.
-        # -> the first of those steps at which a frame expires, else
-        # `start`; None when a loss may fall due before (stepped as before).
-        d = self._plain(sn, link)
-        if d is None or not d.ready(now):
-            return None
-        q = self.max_quiet_ms
-        m = ticks_diff(start, now) // q  # the steps at now + k * q, k = 1..m
-        first = None
-        for req in link.queue:
-            if first is None or ticks_diff(req.deadline, first) < 0:
-                first = req.deadline
-        w = start
-        if first is not None and ticks_diff(start, first) >= 0:
-            k = (ticks_diff(first, now) + q - 1) // q
-            if k < 1:
-                k = 1
-            if k <= m:
-                w = ticks_add(now, k * q)
-        if link.discovery.loss_due(w):
-            return None
-        return w
-
-    def _busy_wake(self, sn, link, now):
-        # A link sending over a transparent driver is stepped at every step
-        # until the modem's airtime has passed (the driver's _busy_until).
-        # With nothing queued, no acknowledgement awaited and no peer to be
-        # declared lost before then, those steps do nothing: the node's next
-        # step is then. Otherwise None (the next step), as before.
-        d = self._plain(sn, link)  # a MAC is not asked while the link sends
-        if d is None or len(link.queue) or d.ready(now):
-            return None
-        if link._fl.state == SLOT_IDLE or len(link._acks):
-            return None
-        t = d._busy_until
-        if ticks_diff(t, now) <= 0 or link.discovery.loss_due(t):
-            return None
-        return t
-
-    def _idle_wake(self, sn, link, now):
-        # A node stepped again and again every max_quiet_ms with nothing to
-        # do: its next step that does something is the first of those at
-        # which its link is no longer idle (an advert or a peer's loss
-        # falls due). For a node whose steps in between do nothing at all
-        # (one link, no transport, a transparent driver that is ready, an
-        # empty queue, no MAC or TDMA, whose ready() draws nothing) that
-        # step is found here, and the ones before it are skipped: the node
-        # does the same things at the same times. Anything that reaches it
-        # (bytes, a task, run()) wakes it earlier, as before.
-        q = self.max_quiet_ms
-        cap = ticks_add(now, q)
-        d = link.driver
-        if d.__class__ is MacDriver and d.mac is not None and not isinstance(d.mac, Tdma):
-            return cap
-        d = self._plain(sn, link)
-        if d is None or len(link.queue) or not d.ready(now):
-            return cap
-        # link.idle(t) turns False once a timer is due and stays so: search
-        # for the first multiple of q at which it does, up to _IDLE_HORIZON
-        lo, hi = 0, _IDLE_HORIZON
-        if link.idle(ticks_add(now, hi * q)):
-            return ticks_add(now, hi * q)
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if link.idle(ticks_add(now, mid * q)):
-                lo = mid
-            else:
-                hi = mid
-        return ticks_add(now, hi * q)
+        return idlesteps.idle_wake(sn, link, now, self.max_quiet_ms) if self.fast and isinstance(d, TransparentDriver) else cap
 
     def step(self):
         now = self.clock()
