@@ -22,7 +22,8 @@
 #   caddy_cycle_seen_*           the same with the diver in sonar (7.64 s)
 #
 # And the scale runs (scale_world below): 16, 64 and 256 nodes with the same
-# load per node, five simulated minutes each:
+# load per node, three simulated minutes each, three times (interleaved; the
+# fastest of the three counts):
 #   sim_cost_<n>_nodes           wall ms per simulated second
 #   sim_heard_per_frame_<n>_nodes  copies of a frame delivered, on average
 #   sim_cost_ratio_64_vs_16, sim_cost_ratio_256_vs_64   their ratios (4 is
@@ -81,8 +82,9 @@ def run_once(kind, seed=1):
 # stay distinct). Names are not shared (a node's table holds 64).
 SCALE_SPACING_M = 400.0
 SCALE_LOSS_CURVE = ((0.0, 0.02), (400.0, 0.05), (600.0, 0.3), (601.0, 1.0))
-SCALE_SIM_S = 300
+SCALE_SIM_S = 180
 SCALE_NODES = (16, 64, 256)
+SCALE_ROUNDS = 3
 
 
 def scale_world(nodes, seed=1):
@@ -172,13 +174,22 @@ def run_caddy(emit):
         emit("caddy_timeouts%s" % tag, sum(c["timeouts"] for c in cyc.counters), "steps")
 
 
-def run_scales(emit):
+def run_scales(emit, rounds=SCALE_ROUNDS):
+    # each size runs `rounds` times, the sizes interleaved, and each figure
+    # is the size's fastest run: on a machine shared with other work single
+    # runs moved the ratios between 2.6 and 6.2
+    best = {}
+    heard = {}
+    for _ in range(rounds):
+        for n in SCALE_NODES:
+            _, wall, heard[n] = run_scale(n)
+            if n not in best or wall < best[n]:
+                best[n] = wall
     cost = {}
     for n in SCALE_NODES:
-        w, wall, heard = run_scale(n)
-        cost[n] = wall * 1000 / SCALE_SIM_S
+        cost[n] = best[n] * 1000 / SCALE_SIM_S
         emit("sim_cost_%d_nodes" % n, cost[n], "ms/s")
-        emit("sim_heard_per_frame_%d_nodes" % n, heard, "copies")
+        emit("sim_heard_per_frame_%d_nodes" % n, heard[n], "copies")
     emit("sim_cost_ratio_64_vs_16", cost[64] / cost[16], "ratio")
     emit("sim_cost_ratio_256_vs_64", cost[256] / cost[64], "ratio")
     emit("sim_memory_256_nodes", scale_memory(256), "B")
