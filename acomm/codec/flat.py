@@ -1,11 +1,16 @@
 # The fast path of a Message whose fields are all flat: scalars (UInt,
-# Fixed, Enum, Bool, Wide of at most 24 bits) or Optional scalars. Encode
-# gathers the codes of several fields into one small int and writes it at
-# once; decode reads the body of an all-scalar message in groups of fields
-# of at most 24 bits and splits each group by shifts. Same bits, values and
+# Fixed, Enum, Bool, Wide of at most 24 bits) or Optional scalars, planned
+# at the message's first use (acomm.codec.message). A catalog frame that
+# holds one such message is packed into one int and unpacked from one
+# (pack_one, unpack_one: up to 62 bits on 64-bit runtimes, 30 on 32-bit
+# boards, where larger ints would allocate). Otherwise encode gathers the
+# codes of several fields into one small int and writes it at once, and
+# decode reads the body of an all-scalar message in groups of fields of at
+# most 24 bits and splits each group by shifts. Same bits, values and
 # errors (with the same field paths) as the fields' own encode and decode,
-# which Message uses when this path does not apply. Ints stay under 30
-# bits, so a 32-bit MicroPython port never allocates for them.
+# which Message uses when this path does not apply, or, for unpack_one,
+# whenever anything is wrong with the frame (tests/core/test_codec_flat.py
+# compares the two on every flat message of every catalog).
 
 import sys
 

@@ -45,7 +45,7 @@ class Message:
         # flat fields (acomm.codec.flat): a faster path, same bits and errors;
         # planned at first use, so a board that never packs one pays nothing
         self._flat = False
-        self._groups = None
+        self._groups = self._whole = None
 
     def __repr__(self):
         return "<Message %s id=%d>" % (self.name, self.msg_id)
@@ -56,8 +56,6 @@ class Message:
                 return f
         raise KeyError(name)
 
-    # Bodies without the message name in errors: Nested uses these, and the
-    # public methods below add the name.
     def _fast(self):
         # -> the flat plan, or None when the fields are not all flat
         global _flat
@@ -71,6 +69,8 @@ class Message:
                 self._whole = _flat.whole(p)
         return p
 
+    # Bodies without the message name in errors: Nested uses these, and the
+    # public methods below add the name.
     def encode_body(self, w, values):
         p = self._flat
         if p is False:
@@ -226,7 +226,7 @@ class Catalog:
         # zero. Anything else must parse as id + body; when it does not, the
         # DecodeError's `messages` holds what was decoded before it.
         if _flat is not None:
-            # a frame of one message of scalars, planned (codec.flat)
+            # a frame of one message of flat fields, planned (codec.flat)
             one = _flat.unpack_one(self._by_id, self.id_bits, buf, nbits)
             if one is not None:
                 return one
