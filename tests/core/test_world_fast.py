@@ -2,8 +2,9 @@
 # end or a packet, and clock jumps over packets in flight) change nothing:
 # the same network run with World(fast=False), which visits every node at
 # every step it visited before the shortcuts, gives the same events at the
-# same simulated times and the same channel counters. TDMA, ALOHA and no
-# MAC, one-way and acknowledged traffic, frames that expire in the queue.
+# same simulated times, the same channel counters and the same MAC state
+# (ALOHA's backoffs and generator). TDMA, ALOHA and no MAC, one-way and
+# acknowledged traffic, frames that expire in the queue.
 from acomm.mac import Aloha, Tdma
 from acomm_sim.channel import Channel
 from acomm_sim.world import World
@@ -51,6 +52,16 @@ def _same(mac_kind):
     for k in ("sent", "delivered", "collided", "deaf", "lost", "range_lost"):
         assert getattr(a.channel, k) == getattr(b.channel, k), (mac_kind, k)
     assert a.now() == b.now()
+    # the MACs were asked the same questions at the same times: same
+    # answers held back, same ALOHA backoffs and generator state
+    for name in a.nodes:
+        da, db = a.nodes[name].link.driver, b.nodes[name].link.driver
+        if getattr(da, "mac", None) is None:
+            continue
+        assert da.held == db.held, (mac_kind, name, da.held, db.held)
+        if hasattr(da.mac, "rng"):
+            assert da.mac.backoffs == db.mac.backoffs and da.mac._until == db.mac._until, (mac_kind, name)
+            assert da.mac.rng.next32() == db.mac.rng.next32(), (mac_kind, name)
     # and the shortcuts were taken: fewer node steps
     assert a.node_steps < b.node_steps, (a.node_steps, b.node_steps)
     return a

@@ -11,7 +11,12 @@
 from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers.transparent import TransparentDriver
 from acomm.linkrange import SLOT_IDLE
-from acomm.mac import MacDriver, Tdma
+from acomm.mac import Aloha, MacDriver, Tdma
+
+# MACs whose may_start() the World can ask later, at the times it would
+# have been asked (World._catch_up): TDMA draws nothing, ALOHA's draws
+# depend only on those times
+MACS = (Tdma, Aloha)
 
 # how many max_quiet_ms an idle node may sleep at most (_idle_wake)
 _IDLE_HORIZON = 4096
@@ -51,14 +56,17 @@ def plain(sn, link):
     return d if isinstance(d, TransparentDriver) else None
 
 def slot_wake(sn, link, now, start, q):
-    # A node with frames queued for its TDMA slot (at `start`, beyond
-    # max_quiet_ms) is stepped every max_quiet_ms until then; those
-    # steps do nothing (a TDMA ready() draws nothing) unless a queued
-    # frame's lifespan ends or a peer falls due to be declared lost.
+    # A node with frames queued for its TDMA slot or the end of its ALOHA
+    # backoff (at `start`, beyond max_quiet_ms) is stepped every
+    # max_quiet_ms until then; those steps do nothing but ask the MAC
+    # (World._catch_up asks it later) unless a queued frame's lifespan
+    # ends or a peer falls due to be declared lost.
     # -> the first of those steps at which a frame expires, else
     # `start`; None when a loss may fall due before (stepped as before).
     d = plain(sn, link)
     if d is None or not d.ready(now):
+        return None
+    if link.discovery.loss_due(start):
         return None
     m = ticks_diff(start, now) // q  # the steps at now + k * q, k = 1..m
     first = None
@@ -72,8 +80,8 @@ def slot_wake(sn, link, now, start, q):
             k = 1
         if k <= m:
             w = ticks_add(now, k * q)
-    if link.discovery.loss_due(w):
-        return None
+    # each skipped step asked the MAC's may_start(): asked later
+    sn.replay = (now, q, link.driver)
     return w
 
 def busy_wake(sn, link, now):
@@ -98,17 +106,25 @@ def idle_wake(sn, link, now, q):
     # which its link is no longer idle (an advert or a peer's loss
     # falls due). For a node whose steps in between do nothing at all
     # (one link, no transport, a transparent driver that is ready, an
-    # empty queue, no MAC or TDMA, whose ready() draws nothing) that
+    # empty queue, no MAC, TDMA or ALOHA) that
     # step is found here, and the ones before it are skipped: the node
     # does the same things at the same times. Anything that reaches it
-    # (bytes, a task, run()) wakes it earlier, as before.
+    # (bytes, a task, run()) wakes it earlier, as before. Under TDMA or
+    # ALOHA those steps asked the MAC whether it may send (ALOHA draws a
+    # new backoff when the old one ran out): World._catch_up asks it, at
+    # the same times, before the node's next step.
     cap = ticks_add(now, q)
-    d = link.driver
-    if d.__class__ is MacDriver and d.mac is not None and not isinstance(d.mac, Tdma):
+    md = link.driver
+    if md.__class__ is not MacDriver or md.mac is None:
+        md = None
+    elif not isinstance(md.mac, MACS):
         return cap
     d = plain(sn, link)
     if d is None or len(link.queue) or not d.ready(now):
         return cap
+    if md is not None:
+        # each skipped step asked the MAC's may_start(): asked later
+        sn.replay = (now, q, md)
     # link.idle(t) turns False once a timer is due and stays so. First
     # a guess from the timers themselves (the advert's and the loss
     # check's), kept when idle() agrees at that step and the one before;

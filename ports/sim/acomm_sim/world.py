@@ -36,7 +36,7 @@ from acomm.clock import ManualClock
 from acomm.compat import ticks_add, ticks_diff
 from acomm.fakeuart import uart_pair
 from acomm.drivers.transparent import TransparentDriver
-from acomm.mac import MacDriver, Tdma
+from acomm.mac import MacDriver
 from acomm.node import Node
 
 from . import idlesteps
@@ -105,6 +105,22 @@ def _modem_out(emu, dev):
     out = emu.take_output()
     if out:
         dev.write(out)
+
+
+def _catch_up(sn, now):
+    # The steps the World skipped for sn (idlesteps) each asked its MAC
+    # whether it may send, through MacDriver.ready(): ask now, at their
+    # times, before anything at `now` (an ALOHA backoff drawn again when
+    # the old one ran out, and the driver's `held` count, come out as they
+    # would have).
+    s, q, d = sn.replay
+    sn.replay = None
+    mac = d.mac
+    t = ticks_add(s, q)
+    while ticks_diff(now, t) > 0:
+        if not mac.may_start(t):
+            d.held += 1
+        t = ticks_add(t, q)
 
 
 def _index(sn):
@@ -181,6 +197,9 @@ class SimNode:
         self.sleep_key = None
         self.sleep_wake = None  # when it joins the active list again
         self.can_sleep = False
+        # (time, period, MacDriver) of steps skipped whose MAC question is
+        # still to be asked (idlesteps, World._catch_up), or None
+        self.replay = None
 
     @property
     def link(self):
@@ -403,13 +422,13 @@ class World:
             if not d.driver.ready(now):
                 return None
             if not queued:
-                return idlesteps.idle_wake(sn, link, now, self.max_quiet_ms) if self.fast and isinstance(d.mac, Tdma) else cap
+                return idlesteps.idle_wake(sn, link, now, self.max_quiet_ms) if self.fast else cap
             if d.mac.may_start(now):
                 return None
             wake = d.mac.next_start(now)
             if wake is not None and ticks_diff(wake, cap) < 0:
                 return wake
-            if wake is not None and self.fast and isinstance(d.mac, Tdma):
+            if wake is not None and self.fast and isinstance(d.mac, idlesteps.MACS):
                 w = idlesteps.slot_wake(sn, link, now, wake, self.max_quiet_ms)
                 if w is not None:
                     return w
@@ -434,6 +453,8 @@ class World:
         for sn in active:
             w = sn.wake
             if w is None or ticks_diff(now, w) >= 0 or sn.host_end.any() or self._extra_bytes(sn):
+                if sn.replay is not None:
+                    _catch_up(sn, now)
                 sn.step(now)
                 sn.wake = self._quiet_until(sn, now)
                 self.node_steps += 1
@@ -529,6 +550,7 @@ class World:
         while ticks_diff(end, clk()) > 0:
             self.step()
             if until is not None and until():
+                self._catch_up_all()
                 return True
             now = clk()
             w = self._all_quiet_until(now, flights)
@@ -544,4 +566,12 @@ class World:
                         ch.poll(ticks_add(now, (k - 1) * self.step_ms))
                     clk.advance(k * self.step_ms)
                     self.jumped_ms += k * self.step_ms
+        self._catch_up_all()
         return until is None
+
+    def _catch_up_all(self):
+        # at the end of a run, the MAC questions of the steps skipped before it
+        now = self.clock()
+        for sn in self._order:
+            if sn.replay is not None:
+                _catch_up(sn, now)
