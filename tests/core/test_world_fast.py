@@ -58,8 +58,8 @@ def _same(mac_kind):
         da, db = a.nodes[name].link.driver, b.nodes[name].link.driver
         if getattr(da, "mac", None) is None:
             continue
-        assert da.held == db.held, (mac_kind, name, da.held, db.held)
-        if hasattr(da.mac, "rng"):
+        if hasattr(da.mac, "rng"):  # ALOHA (TDMA's held counts the polls, fewer when skipped)
+            assert da.held == db.held, (mac_kind, name, da.held, db.held)
             assert da.mac.backoffs == db.mac.backoffs and da.mac._until == db.mac._until, (mac_kind, name)
             assert da.mac.rng.next32() == db.mac.rng.next32(), (mac_kind, name)
     # and the shortcuts were taken: fewer node steps

@@ -84,6 +84,7 @@ class Channel(Medium):
         self.collisions = collisions
         self._now = now
         self._tracks = {}
+        self._near = {}  # src -> {dst: True} within reach (_near_of)
         self._bursts = []  # (start, end, receiver or None)
         self._collided = {}  # flight seq -> True (lost at its receiver)
         self.collided = 0  # copies lost to a collision
@@ -100,10 +101,40 @@ class Channel(Medium):
     # -- geometry ----------------------------------------------------------------
     def set_position(self, addr, east, north, depth):
         self._tracks.pop(addr, None)
+        self._near = {}
         Medium.set_position(self, addr, east, north, depth)
 
     def set_track(self, addr, track):
         self._tracks[addr] = track
+        self._near = {}
+
+    def set_distance(self, a, b, metres):
+        self._near = {}
+        Medium.set_distance(self, a, b, metres)
+
+    def attach(self, addr, station):
+        self._near = {}
+        Medium.attach(self, addr, station)
+
+    def detach(self, addr):
+        self._near = {}
+        Medium.detach(self, addr)
+
+    def _near_of(self, src):
+        # The stations closer to src than where the loss curve becomes
+        # certain (its last point, when that point's loss is 1), or None
+        # when that cannot be known once for all (moving nodes, no such
+        # curve). Every other station loses src's packets for sure; kept
+        # per source until a position, distance or station changes.
+        curve = self.loss_curve
+        if self._tracks or curve is None or curve[-1][1] < 1.0:
+            return None
+        near = self._near.get(src)
+        if near is None:
+            lim = curve[-1][0]
+            near = {dst: True for dst in self._stations if dst != src and self.distance(src, dst) < lim}
+            self._near[src] = near
+        return near
 
     def position(self, addr, t=None):
         tr = self._tracks.get(addr)
@@ -140,7 +171,30 @@ class Channel(Medium):
     def transmit(self, now, src, packet, airtime_ms):
         self._now = now
         self.sent += 1
-        return Medium.transmit(self, now, src, packet, airtime_ms)
+        near = self._near_of(src)
+        if near is None:
+            return Medium.transmit(self, now, src, packet, airtime_ms)
+        # Stations out of reach take the same draws from the generator as
+        # Medium.transmit gives them (the fixed loss's, then the curve's,
+        # certain), without working out their distance: a large network's
+        # transmission costs little per station it cannot reach.
+        end = self._start(now, src, airtime_ms)
+        rng = self.rng
+        for dst in self._stations:
+            if dst == src:
+                continue
+            if dst not in near:
+                if self.loss and rng.chance(self.loss):
+                    self.lost += 1
+                else:
+                    rng.next32()
+                    self.range_lost += 1
+                continue
+            d = self.distance(src, dst)
+            if self._lost_on_the_way(d):
+                continue
+            self._fly(now, end, src, dst, packet, d)
+        return end
 
     def _lost_on_the_way(self, distance):
         if Medium._lost_on_the_way(self, distance):

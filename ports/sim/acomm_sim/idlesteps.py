@@ -13,9 +13,11 @@ from acomm.drivers.transparent import TransparentDriver
 from acomm.linkrange import SLOT_IDLE
 from acomm.mac import Aloha, MacDriver, Tdma
 
-# MACs whose may_start() the World can ask later, at the times it would
-# have been asked (World._catch_up): TDMA draws nothing, ALOHA's draws
-# depend only on those times
+# MACs whose questions a skipped step may leave out: TDMA's may_start()
+# depends on the time only; ALOHA's draws depend on the times it was asked
+# at, so the World asks it later, at those times (World._catch_up). Only
+# the MacDriver's `held` count (of ready() calls answered "not yet") comes
+# out lower under TDMA: it counts the polls.
 MACS = (Tdma, Aloha)
 
 # how many max_quiet_ms an idle node may sleep at most (_idle_wake)
@@ -59,8 +61,8 @@ def slot_wake(sn, link, now, start, q):
     # A node with frames queued for its TDMA slot or the end of its ALOHA
     # backoff (at `start`, beyond max_quiet_ms) is stepped every
     # max_quiet_ms until then; those steps do nothing but ask the MAC
-    # (World._catch_up asks it later) unless a queued frame's lifespan
-    # ends or a peer falls due to be declared lost.
+    # (ALOHA's is asked later: World._catch_up) unless a queued frame's
+    # lifespan ends or a peer falls due to be declared lost.
     # -> the first of those steps at which a frame expires, else
     # `start`; None when a loss may fall due before (stepped as before).
     d = plain(sn, link)
@@ -80,8 +82,9 @@ def slot_wake(sn, link, now, start, q):
             k = 1
         if k <= m:
             w = ticks_add(now, k * q)
-    # each skipped step asked the MAC's may_start(): asked later
-    sn.replay = (now, q, link.driver)
+    if isinstance(link.driver.mac, Aloha):
+        # each skipped step asked ALOHA's may_start(): asked later
+        sn.replay = (now, q, link.driver)
     return w
 
 def busy_wake(sn, link, now):
@@ -109,10 +112,10 @@ def idle_wake(sn, link, now, q):
     # empty queue, no MAC, TDMA or ALOHA) that
     # step is found here, and the ones before it are skipped: the node
     # does the same things at the same times. Anything that reaches it
-    # (bytes, a task, run()) wakes it earlier, as before. Under TDMA or
-    # ALOHA those steps asked the MAC whether it may send (ALOHA draws a
-    # new backoff when the old one ran out): World._catch_up asks it, at
-    # the same times, before the node's next step.
+    # (bytes, a task, run()) wakes it earlier, as before. Under ALOHA
+    # those steps asked the MAC whether it may send (it draws a new backoff
+    # when the old one ran out): World._catch_up asks it, at the same
+    # times, before the node's next step.
     cap = ticks_add(now, q)
     md = link.driver
     if md.__class__ is not MacDriver or md.mac is None:
@@ -122,8 +125,8 @@ def idle_wake(sn, link, now, q):
     d = plain(sn, link)
     if d is None or len(link.queue) or not d.ready(now):
         return cap
-    if md is not None:
-        # each skipped step asked the MAC's may_start(): asked later
+    if md is not None and isinstance(md.mac, Aloha):
+        # each skipped step asked ALOHA's may_start(): asked later
         sn.replay = (now, q, md)
     # link.idle(t) turns False once a timer is due and stays so. First
     # a guess from the timers themselves (the advert's and the loss

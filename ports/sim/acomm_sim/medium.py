@@ -80,26 +80,35 @@ class Medium:
         return False
 
     def transmit(self, now, src, packet, airtime_ms):
-        end = ticks_add(now, airtime_ms)
-        hist = self._tx.setdefault(src, [])
-        hist.append((now, end))
-        if len(hist) > _TX_HISTORY:
-            hist.pop(0)
+        end = self._start(now, src, airtime_ms)
         for dst in self._stations:
             if dst == src:
                 continue
             d = self.distance(src, dst)
             if self._lost_on_the_way(d):
                 continue
-            prop = int(d * 1000 / self.sound_speed)
-            self._seq += 1
-            item = [ticks_add(end, prop), self._seq, dst, src, packet, ticks_add(now, prop), d]
-            f = self._flight
-            i = len(f)
-            while i > 0 and ticks_diff(f[i - 1][0], item[0]) > 0:
-                i -= 1
-            f.insert(i, item)
+            self._fly(now, end, src, dst, packet, d)
         return end
+
+    def _start(self, now, src, airtime_ms):
+        # the sender's half-duplex history; -> when its last bit leaves
+        end = ticks_add(now, airtime_ms)
+        hist = self._tx.setdefault(src, [])
+        hist.append((now, end))
+        if len(hist) > _TX_HISTORY:
+            hist.pop(0)
+        return end
+
+    def _fly(self, now, end, src, dst, packet, d):
+        # a copy on its way to dst, in arrival order
+        prop = int(d * 1000 / self.sound_speed)
+        self._seq += 1
+        item = [ticks_add(end, prop), self._seq, dst, src, packet, ticks_add(now, prop), d]
+        f = self._flight
+        i = len(f)
+        while i > 0 and ticks_diff(f[i - 1][0], item[0]) > 0:
+            i -= 1
+        f.insert(i, item)
 
     def _lost_on_the_way(self, distance):
         # decided when the packet leaves (the acoustic channel adds range)
