@@ -85,6 +85,7 @@ class Channel(Medium):
         self._now = now
         self._tracks = {}
         self._near = {}  # src -> {dst: True} within reach (_near_of)
+        self._grid = None  # (square east, square north) -> [addr] (_candidates)
         self._bursts = []  # (start, end, receiver or None)
         self._collided = {}  # flight seq -> True (lost at its receiver)
         self.collided = 0  # copies lost to a collision
@@ -102,22 +103,27 @@ class Channel(Medium):
     def set_position(self, addr, east, north, depth):
         self._tracks.pop(addr, None)
         self._near = {}
+        self._grid = None
         Medium.set_position(self, addr, east, north, depth)
 
     def set_track(self, addr, track):
         self._tracks[addr] = track
         self._near = {}
+        self._grid = None
 
     def set_distance(self, a, b, metres):
         self._near = {}
+        self._grid = None
         Medium.set_distance(self, a, b, metres)
 
     def attach(self, addr, station):
         self._near = {}
+        self._grid = None
         Medium.attach(self, addr, station)
 
     def detach(self, addr):
         self._near = {}
+        self._grid = None
         Medium.detach(self, addr)
 
     def _near_of(self, src):
@@ -132,9 +138,35 @@ class Channel(Medium):
         near = self._near.get(src)
         if near is None:
             lim = curve[-1][0]
-            near = {dst: True for dst in self._stations if dst != src and self.distance(src, dst) < lim}
+            cand = self._candidates(src, lim)
+            near = {dst: True for dst in cand if dst != src and self.distance(src, dst) < lim}
             self._near[src] = near
         return near
+
+    def _candidates(self, src, lim):
+        # the stations that may be within lim metres of src: those in the
+        # 3 x 3 squares of side lim around it, when every station has a
+        # position and no pair a distance of its own (else all of them)
+        if self._dist or lim <= 0:
+            return self._stations
+        grid = self._grid
+        if grid is None:
+            grid = {}
+            for a in self._stations:
+                p = self._pos.get(a)
+                if p is None:
+                    return self._stations
+                grid.setdefault((int(p[0] // lim), int(p[1] // lim)), []).append(a)
+            self._grid = grid
+        p = self._pos.get(src)
+        if p is None:
+            return self._stations
+        gx, gy = int(p[0] // lim), int(p[1] // lim)
+        out = []
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                out.extend(grid.get((gx + dx, gy + dy), ()))
+        return out
 
     def position(self, addr, t=None):
         tr = self._tracks.get(addr)
