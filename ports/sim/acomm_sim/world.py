@@ -108,19 +108,30 @@ def _modem_out(emu, dev):
 
 
 def _catch_up(sn, now):
-    # The steps the World skipped for sn (idlesteps) each asked its MAC
-    # whether it may send, through MacDriver.ready(): ask now, at their
-    # times, before anything at `now` (an ALOHA backoff drawn again when
-    # the old one ran out, and the driver's `held` count, come out as they
-    # would have).
+    # The steps the World skipped for sn (idlesteps) each asked its ALOHA
+    # MAC whether it may send, through MacDriver.ready(): ask now, at their
+    # times, before anything at `now`, so that the backoffs drawn again
+    # when the old one ran out, and the driver's `held` count, come out as
+    # they would have. Between two draws the answers follow from the
+    # backoff's end alone (acomm.mac.Aloha.may_start): counted, not asked.
     s, q, d = sn.replay
     sn.replay = None
     mac = d.mac
+    b = mac.max_backoff_ms
     t = ticks_add(s, q)
     while ticks_diff(now, t) > 0:
-        if not mac.may_start(t):
-            d.held += 1
-        t = ticks_add(t, q)
+        u = mac._until
+        if u is None or ticks_diff(t, u) > b:
+            if not mac.may_start(t):  # a draw
+                d.held += 1
+            t = ticks_add(t, q)
+            continue
+        a = ticks_diff(u, t)
+        # the steps t + j*q, j < k, that draw nothing and come before now
+        k = min((b + a) // q + 1, (ticks_diff(now, t) + q - 1) // q)
+        if a > 0:
+            d.held += min(k, (a + q - 1) // q)  # "not yet": before u
+        t = ticks_add(t, k * q)
 
 
 def _index(sn):
