@@ -16,7 +16,7 @@ def _plain(ev):
     return tuple(x if isinstance(x, (int, float, str, bytes, type(None))) else "obj" for x in ev)
 
 
-def network(mac_kind, fast, n=5, rounds=3):
+def network(mac_kind, fast, n=4, rounds=2):
     ch = Channel(seed=7, loss=0.1, loss_curve=((0.0, 0.0), (150.0, 0.2), (400.0, 1.0)))
     w = World(seed=7, channel=ch, fast=fast)
     sched = [(i + 1, AIR + 400, 150) for i in range(n)]
@@ -40,7 +40,7 @@ def network(mac_kind, fast, n=5, rounds=3):
             sn.node.send("acoustic", "n%d" % (i % n + 1), b"ack me %d" % k, 30, 4, True)
             sn.node.send("acoustic", "*", b"short-lived", 1, 9)
         w.run(20000)
-    w.run(90000)  # quiet: adverts and losses fall due
+    w.run(60000)  # quiet: adverts and losses fall due
     return w
 
 
