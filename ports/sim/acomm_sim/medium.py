@@ -105,10 +105,17 @@ class Medium:
         self._seq += 1
         item = [ticks_add(end, prop), self._seq, dst, src, packet, ticks_add(now, prop), d]
         f = self._flight
-        i = len(f)
-        while i > 0 and ticks_diff(f[i - 1][0], item[0]) > 0:
-            i -= 1
-        f.insert(i, item)
+        # after every copy arriving at or before it (a binary search: a
+        # large network has many copies on their way)
+        t = item[0]
+        lo, hi = 0, len(f)
+        while lo < hi:
+            mid = (lo + hi) >> 1
+            if ticks_diff(f[mid][0], t) > 0:
+                hi = mid
+            else:
+                lo = mid + 1
+        f.insert(lo, item)
 
     def _lost_on_the_way(self, distance):
         # decided when the packet leaves (the acoustic channel adds range)
