@@ -84,7 +84,7 @@ class Channel(Medium):
         self.collisions = collisions
         self._now = now
         self._tracks = {}
-        self._near = {}  # src -> {dst: True} within reach (_near_of)
+        self._near = {}  # src -> reach (_near_of)
         self._grid = None  # (square east, square north) -> [addr] (_candidates)
         self._bursts = []  # (start, end, receiver or None)
         self._collided = {}  # flight seq -> True (lost at its receiver)
@@ -130,8 +130,11 @@ class Channel(Medium):
         # The stations closer to src than where the loss curve becomes
         # certain (its last point, when that point's loss is 1), or None
         # when that cannot be known once for all (moving nodes, no such
-        # curve). Every other station loses src's packets for sure; kept
-        # per source until a position, distance or station changes.
+        # curve). Every other station loses src's packets for sure. ->
+        # ({dst: True} within reach, ((stations out of reach before it,
+        # dst), ...) in the stations' order, out of reach after the last,
+        # out of reach in all); kept per source until a position, distance
+        # or station changes.
         curve = self.loss_curve
         if self._tracks or curve is None or curve[-1][1] < 1.0:
             return None
@@ -139,7 +142,20 @@ class Channel(Medium):
         if near is None:
             lim = curve[-1][0]
             cand = self._candidates(src, lim)
-            near = {dst: True for dst in cand if dst != src and self.distance(src, dst) < lim}
+            within = {dst: True for dst in cand if dst != src and self.distance(src, dst) < lim}
+            # and, in the stations' order, how many out of reach come
+            # before each one within it, and after the last
+            steps = []
+            k = 0
+            for dst in self._stations:
+                if dst == src:
+                    continue
+                if dst in within:
+                    steps.append((k, dst))
+                    k = 0
+                else:
+                    k += 1
+            near = (within, tuple(steps), k, len(self._stations) - 1 - len(steps))
             self._near[src] = near
         return near
 
@@ -212,10 +228,25 @@ class Channel(Medium):
         # transmission costs little per station it cannot reach.
         end = self._start(now, src, airtime_ms)
         rng = self.rng
+        if not self.loss:
+            # out of reach: one draw each (the curve's, certain), counted
+            nxt = rng.next32
+            for k, dst in near[1]:
+                for _ in range(k):
+                    nxt()
+                d = self.distance(src, dst)
+                if self._lost_on_the_way(d):
+                    continue
+                self._fly(now, end, src, dst, packet, d)
+            for _ in range(near[2]):
+                nxt()
+            self.range_lost += near[3]
+            return end
+        within = near[0]
         for dst in self._stations:
             if dst == src:
                 continue
-            if dst not in near:
+            if dst not in within:
                 if self.loss and rng.chance(self.loss):
                     self.lost += 1
                 else:
