@@ -313,8 +313,9 @@ def _simulator_section(f, a):
     a("From `acomm bench sim` and `acomm bench sweep` (docs/simulator.md says what each run is). The "
       "speed-up is simulated seconds per wall second of 16 BPSK nodes on TDMA for one simulated hour; the "
       "scale runs put 16, 64 and 256 nodes on a 400 m grid, each hearing at most its 8 nearest, each "
-      "sending one frame a minute under ALOHA, and give the wall time per simulated second (the fastest of "
-      "three runs; a cost ratio of 4 for 4 times the nodes is linear); the memory is tracemalloc's peak while the 256-node world is "
+      "sending one frame a minute under ALOHA, for ten simulated minutes, and give the process's CPU time per "
+      "simulated second (the fastest of three runs; wall time moved by a factor of 2 with the other work "
+      "on this shared machine; a cost ratio of 4 for 4 times the nodes is linear); the memory is tracemalloc's peak while the 256-node world is "
       "built and runs a minute. The sweep runs the demo mission 12 times (3 losses, 2 MACs, 2 seeds, 20 "
       "simulated minutes) in one process and then on a Dask LocalCluster of 2 worker processes (identical "
       "CSVs).")

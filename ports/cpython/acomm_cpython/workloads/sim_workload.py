@@ -24,7 +24,7 @@
 # And the scale runs (scale_world below): 16, 64 and 256 nodes with the same
 # load per node, ten simulated minutes each, three times (interleaved; the
 # fastest of the three counts):
-#   sim_cost_<n>_nodes           wall ms per simulated second
+#   sim_cost_<n>_nodes           CPU ms (this process's) per simulated second
 #   sim_heard_per_frame_<n>_nodes  copies of a frame delivered, on average
 #   sim_cost_ratio_64_vs_16, sim_cost_ratio_256_vs_64   their ratios (4 is
 #                                linear in the number of nodes)
