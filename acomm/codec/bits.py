@@ -25,6 +25,11 @@ class BitWriter:
     def bit_length(self):
         return self._pos
 
+    @property
+    def capacity(self):
+        # bits the buffer holds
+        return self._cap
+
     def __len__(self):
         # whole bytes used, the last one padded with zero bits
         return (self._pos + 7) >> 3

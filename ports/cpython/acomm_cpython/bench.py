@@ -19,6 +19,9 @@ BENCHES = {
     "queue": "queue_workload",
     "discovery": "discovery_workload",
     "codec": "codec_workload",
+    # encode + decode of the teleop command and the CADDY diver status, per
+    # runtime, where the time goes, and against cbor2 and ltcodecs
+    "encode": "encode_workload",
     "fec": "fec_workload",
     "sim": "sim_workload",
     "teleop": "teleop_workload",
@@ -34,8 +37,10 @@ BENCHES = {
     "attack": "attack_workload",
     # the operator console: the page's size and its MicroPython heap
     "web": "web_workload",
+    # a sweep in one process and on 2 Dask workers (needs the sweep extra)
+    "sweep": "sweep_workload",
 }
-NOT_IN_ALL = ("compare", "soak", "attack")
+NOT_IN_ALL = ("compare", "soak", "attack", "sweep")
 
 
 def find_micropython():
@@ -56,8 +61,11 @@ def run_micropython(modname, mp):
     wl_dir = os.path.dirname(os.path.abspath(_workload_file(modname)))
     env = dict(os.environ)
     env["MICROPYPATH"] = ".frozen:%s:%s" % (core_root, wl_dir)
+    # a workload may ask for its own heap (MICROPYTHON_HEAP): timings of
+    # code that allocates depend on it, through the collector's sweeps
+    heap = getattr(importlib.import_module("acomm_cpython.workloads." + modname), "MICROPYTHON_HEAP", "8M")
     proc = subprocess.run(
-        [mp, "-X", "heapsize=8M", _workload_file(modname)],
+        [mp, "-X", "heapsize=" + heap, _workload_file(modname)],
         capture_output=True,
         text=True,
         env=env,

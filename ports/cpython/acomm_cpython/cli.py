@@ -57,6 +57,11 @@ def main(argv=None):
 
     boardrun.add_arguments(r)
 
+    sw = sub.add_parser("sweep", help="a parameter study: a grid of simulated runs over seeds, locally or on Dask")
+    from . import sweep
+
+    sweep.add_arguments(sw)
+
     args = p.parse_args(argv)
     if args.cmd == "bench":
         from . import bench
@@ -78,6 +83,8 @@ def main(argv=None):
         return replay.main(args)
     if args.cmd == "run":
         return boardrun.main(args)
+    if args.cmd == "sweep":
+        return sweep.main(args)
     p.print_help()
     return 2
 

@@ -29,6 +29,7 @@ package(
         "codec/crc32.py",
         "codec/fec.py",
         "codec/fields.py",
+        "codec/flat.py",
         "codec/hmacsha256.py",
         "codec/message.py",
         "codec/text6.py",

@@ -84,6 +84,8 @@ class Channel(Medium):
         self.collisions = collisions
         self._now = now
         self._tracks = {}
+        self._near = {}  # src -> reach (_near_of)
+        self._grid = None  # (square east, square north) -> [addr] (_candidates)
         self._bursts = []  # (start, end, receiver or None)
         self._collided = {}  # flight seq -> True (lost at its receiver)
         self.collided = 0  # copies lost to a collision
@@ -100,10 +102,87 @@ class Channel(Medium):
     # -- geometry ----------------------------------------------------------------
     def set_position(self, addr, east, north, depth):
         self._tracks.pop(addr, None)
+        self._near = {}
+        self._grid = None
         Medium.set_position(self, addr, east, north, depth)
 
     def set_track(self, addr, track):
         self._tracks[addr] = track
+        self._near = {}
+        self._grid = None
+
+    def set_distance(self, a, b, metres):
+        self._near = {}
+        self._grid = None
+        Medium.set_distance(self, a, b, metres)
+
+    def attach(self, addr, station):
+        self._near = {}
+        self._grid = None
+        Medium.attach(self, addr, station)
+
+    def detach(self, addr):
+        self._near = {}
+        self._grid = None
+        Medium.detach(self, addr)
+
+    def _near_of(self, src):
+        # The stations closer to src than where the loss curve becomes
+        # certain (its last point, when that point's loss is 1), or None
+        # when that cannot be known once for all (moving nodes, no such
+        # curve). Every other station loses src's packets for sure. ->
+        # ({dst: True} within reach, ((stations out of reach before it,
+        # dst), ...) in the stations' order, out of reach after the last,
+        # out of reach in all); kept per source until a position, distance
+        # or station changes.
+        curve = self.loss_curve
+        if self._tracks or curve is None or curve[-1][1] < 1.0:
+            return None
+        near = self._near.get(src)
+        if near is None:
+            lim = curve[-1][0]
+            cand = self._candidates(src, lim)
+            within = {dst: True for dst in cand if dst != src and self.distance(src, dst) < lim}
+            # and, in the stations' order, how many out of reach come
+            # before each one within it, and after the last
+            steps = []
+            k = 0
+            for dst in self._stations:
+                if dst == src:
+                    continue
+                if dst in within:
+                    steps.append((k, dst))
+                    k = 0
+                else:
+                    k += 1
+            near = (within, tuple(steps), k, len(self._stations) - 1 - len(steps))
+            self._near[src] = near
+        return near
+
+    def _candidates(self, src, lim):
+        # the stations that may be within lim metres of src: those in the
+        # 3 x 3 squares of side lim around it, when every station has a
+        # position and no pair a distance of its own (else all of them)
+        if self._dist or lim <= 0:
+            return self._stations
+        grid = self._grid
+        if grid is None:
+            grid = {}
+            for a in self._stations:
+                p = self._pos.get(a)
+                if p is None:
+                    return self._stations
+                grid.setdefault((int(p[0] // lim), int(p[1] // lim)), []).append(a)
+            self._grid = grid
+        p = self._pos.get(src)
+        if p is None:
+            return self._stations
+        gx, gy = int(p[0] // lim), int(p[1] // lim)
+        out = []
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                out.extend(grid.get((gx + dx, gy + dy), ()))
+        return out
 
     def position(self, addr, t=None):
         tr = self._tracks.get(addr)
@@ -140,7 +219,45 @@ class Channel(Medium):
     def transmit(self, now, src, packet, airtime_ms):
         self._now = now
         self.sent += 1
-        return Medium.transmit(self, now, src, packet, airtime_ms)
+        near = self._near_of(src)
+        if near is None:
+            return Medium.transmit(self, now, src, packet, airtime_ms)
+        # Stations out of reach take the same draws from the generator as
+        # Medium.transmit gives them (the fixed loss's, then the curve's,
+        # certain), without working out their distance: a large network's
+        # transmission costs little per station it cannot reach.
+        end = self._start(now, src, airtime_ms)
+        rng = self.rng
+        if not self.loss:
+            # out of reach: one draw each (the curve's, certain), counted
+            nxt = rng.next32
+            for k, dst in near[1]:
+                for _ in range(k):
+                    nxt()
+                d = self.distance(src, dst)
+                if self._lost_on_the_way(d):
+                    continue
+                self._fly(now, end, src, dst, packet, d)
+            for _ in range(near[2]):
+                nxt()
+            self.range_lost += near[3]
+            return end
+        within = near[0]
+        for dst in self._stations:
+            if dst == src:
+                continue
+            if dst not in within:
+                if self.loss and rng.chance(self.loss):
+                    self.lost += 1
+                else:
+                    rng.next32()
+                    self.range_lost += 1
+                continue
+            d = self.distance(src, dst)
+            if self._lost_on_the_way(d):
+                continue
+            self._fly(now, end, src, dst, packet, d)
+        return end
 
     def _lost_on_the_way(self, distance):
         if Medium._lost_on_the_way(self, distance):

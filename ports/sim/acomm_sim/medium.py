@@ -36,6 +36,9 @@ class Medium:
         self.delivered = 0
         self.lost = 0
         self.deaf = 0  # lost because the receiver was transmitting
+        # a list to which poll() appends every station it delivered to (the
+        # World wakes their nodes), or None
+        self.receivers = None
 
     def attach(self, addr, station):
         if addr in self._stations and self._stations[addr] is not station:
@@ -77,26 +80,42 @@ class Medium:
         return False
 
     def transmit(self, now, src, packet, airtime_ms):
-        end = ticks_add(now, airtime_ms)
-        hist = self._tx.setdefault(src, [])
-        hist.append((now, end))
-        if len(hist) > _TX_HISTORY:
-            hist.pop(0)
+        end = self._start(now, src, airtime_ms)
         for dst in self._stations:
             if dst == src:
                 continue
             d = self.distance(src, dst)
             if self._lost_on_the_way(d):
                 continue
-            prop = int(d * 1000 / self.sound_speed)
-            self._seq += 1
-            item = [ticks_add(end, prop), self._seq, dst, src, packet, ticks_add(now, prop), d]
-            f = self._flight
-            i = len(f)
-            while i > 0 and ticks_diff(f[i - 1][0], item[0]) > 0:
-                i -= 1
-            f.insert(i, item)
+            self._fly(now, end, src, dst, packet, d)
         return end
+
+    def _start(self, now, src, airtime_ms):
+        # the sender's half-duplex history; -> when its last bit leaves
+        end = ticks_add(now, airtime_ms)
+        hist = self._tx.setdefault(src, [])
+        hist.append((now, end))
+        if len(hist) > _TX_HISTORY:
+            hist.pop(0)
+        return end
+
+    def _fly(self, now, end, src, dst, packet, d):
+        # a copy on its way to dst, in arrival order
+        prop = int(d * 1000 / self.sound_speed)
+        self._seq += 1
+        item = [ticks_add(end, prop), self._seq, dst, src, packet, ticks_add(now, prop), d]
+        f = self._flight
+        # after every copy arriving at or before it (a binary search: a
+        # large network has many copies on their way)
+        t = item[0]
+        lo, hi = 0, len(f)
+        while lo < hi:
+            mid = (lo + hi) >> 1
+            if ticks_diff(f[mid][0], t) > 0:
+                hi = mid
+            else:
+                lo = mid + 1
+        f.insert(lo, item)
 
     def _lost_on_the_way(self, distance):
         # decided when the packet leaves (the acoustic channel adds range)
@@ -142,6 +161,8 @@ class Medium:
                 continue
             self.delivered += 1
             st.receive(end, src, self._damaged(packet), d)
+            if self.receivers is not None:
+                self.receivers.append(st)
 
     def _lost_on_arrival(self, item):
         # what the acoustic channel decides at the receiver (collisions,
@@ -162,3 +183,7 @@ class Medium:
 
     def in_flight(self):
         return len(self._flight)
+
+    def next_arrival(self):
+        # when the next packet's last bit arrives somewhere, or None
+        return self._flight[0][0] if self._flight else None

@@ -24,6 +24,10 @@ PROFILES = {
 
 
 class PacketModemEmulator(SansIO):
+    # idle, it does nothing until the host writes or a packet arrives (the
+    # World lets its node sleep)
+    quiet_until_heard = True
+
     def __init__(self, medium, address, now=0, bitrate=400, overhead=12, fixed_ms=0, mtu=255, queue=8,
                  profile=None):
         SansIO.__init__(self)
@@ -71,6 +75,11 @@ class PacketModemEmulator(SansIO):
     def idle(self, now):
         # nothing queued, nothing on the air: poll() would do nothing
         return not self._queue and not self.transmitting(now)
+
+    def busy_until(self, now):
+        # until when poll() has nothing to do while it is not idle: the end
+        # of the packet on the air (None: at once)
+        return self._tx_until if self.transmitting(now) else None
 
     def transmitting(self, now):
         return self._tx_until is not None and ticks_diff(now, self._tx_until) < 0

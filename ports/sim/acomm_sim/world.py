@@ -30,13 +30,17 @@
 # their network on the channel and stay off the acoustic medium).
 # Portable Python (the core tests run it on MicroPython too).
 
+import heapq
+
 from acomm_sim.clock import ManualClock
 from acomm.compat import ticks_add, ticks_diff
 from acomm_sim.fakeuart import uart_pair
+from acomm.drivers.transparent import TransparentDriver
 from acomm.drivers.mac import MacDriver
 from acomm.drivers.registry import driver_class
 from acomm.node import Node
 
+from . import idlesteps
 from .channel import Channel
 
 
@@ -108,6 +112,69 @@ def _modem_out(emu, dev):
         dev.write(out)
 
 
+def _catch_up(sn, now):
+    # The steps the World skipped for sn (idlesteps) each asked its ALOHA
+    # MAC whether it may send, through MacDriver.ready(): ask now, at their
+    # times, before anything at `now`, so that the backoffs drawn again
+    # when the old one ran out, and the driver's `held` count, come out as
+    # they would have. Between two draws the answers follow from the
+    # backoff's end alone (acomm.drivers.mac.Aloha.may_start): counted, not asked.
+    s, q, d = sn.replay
+    sn.replay = None
+    mac = d.mac
+    b = mac.max_backoff_ms
+    t = ticks_add(s, q)
+    while ticks_diff(now, t) > 0:
+        u = mac._until
+        if u is None or ticks_diff(t, u) > b:
+            if not mac.may_start(t):  # a draw
+                d.held += 1
+            t = ticks_add(t, q)
+            continue
+        a = ticks_diff(u, t)
+        # the steps t + j*q, j < k, that draw nothing and come before now
+        k = min((b + a) // q + 1, (ticks_diff(now, t) + q - 1) // q)
+        if a > 0:
+            d.held += min(k, (a + q - 1) // q)  # "not yet": before u
+        t = ticks_add(t, k * q)
+
+
+def _index(sn):
+    return sn.index
+
+
+def _node_quiet(now, sn):
+    if not _modem_quiet(now, sn.emu, sn.host_end, sn.modem_end):
+        return False
+    for x in sn.extra:
+        if not _modem_quiet(now, x[2], x[3], x[4]):
+            return False
+    return True
+
+
+def _sleep_until(now, sn):
+    # When a node that may sleep (World._join) must be visited again: its
+    # own wake-up, or earlier when one of its modems is busy and says until
+    # when its poll has nothing to do (busy_until). None: it may not sleep.
+    w = sn.wake
+    if w is None:
+        return None
+    ends = [(sn.emu, sn.host_end, sn.modem_end)]
+    for x in sn.extra:
+        ends.append((x[2], x[3], x[4]))
+    for emu, host, dev in ends:
+        if host.any() or host.in_flight() or dev.any() or dev.in_flight():
+            return None
+        if emu.idle(now):
+            continue
+        t = emu.busy_until(now)
+        if t is None:
+            return None
+        if ticks_diff(t, w) < 0:
+            w = t
+    return w
+
+
 def _modem_quiet(now, emu, host, dev):
     # nothing can come of this modem and its line before something else does
     idle = getattr(emu, "idle", None)
@@ -117,6 +184,12 @@ def _modem_quiet(now, emu, host, dev):
         if end.any() or end.in_flight():
             return False
     return True
+
+
+def _sleeps(emu):
+    # an emulator that, once idle, does nothing until bytes come from its
+    # host or the medium delivers a packet to it: its node may sleep
+    return getattr(emu, "quiet_until_heard", False)
 
 
 class SimNode:
@@ -135,6 +208,14 @@ class SimNode:
         self.extra = []
         # one round of the node's work; a board's Board.tick (World.adopt)
         self.step = node.step if node is not None else None
+        self.index = 0  # place in World._order
+        self.asleep = False  # in World._sleeping, not stepped
+        self.sleep_key = None
+        self.sleep_wake = None  # when it joins the active list again
+        self.can_sleep = False
+        # (time, period, MacDriver) of steps skipped whose MAC question is
+        # still to be asked (idlesteps, World._catch_up), or None
+        self.replay = None
 
     @property
     def link(self):
@@ -143,8 +224,15 @@ class SimNode:
 
 
 class World:
-    def __init__(self, seed=1, channel=None, start=0, step_ms=10, max_quiet_ms=100):
+    def __init__(self, seed=1, channel=None, start=0, step_ms=10, max_quiet_ms=100, share_names=True, fast=True):
         self.clock = ManualClock(start)
+        # fast: nodes sleep and the clock jumps whenever that changes nothing
+        # (the figures are the same; False visits every node at every step
+        # it would have been visited before, for tests that check just that)
+        self.fast = fast
+        # every node is told every other's name (False: none, for networks
+        # larger than a node's name table, which then learns from adverts)
+        self.share_names = share_names
         self.channel = channel if channel is not None else Channel(seed=seed, now=start)
         self.seed = seed
         self.step_ms = step_ms
@@ -157,6 +245,16 @@ class World:
         self.jumped_ms = 0
         self._tasks = []  # [task, wake]
         self._loose = []  # [emulator, host end, modem end] no node owns
+        # Nodes whose modems are idle and that wait for a wake-up sleep in a
+        # heap of (ms after _base, index, node) and are not visited by the
+        # steps; a packet the channel delivers to their modem, a task, the
+        # wake-up or run() wakes them. The others are _active, in _order.
+        self._active = []
+        self._sorted = True
+        self._sleeping = []
+        self._base = start
+        self._by_station = {}  # id(emulator) -> SimNode
+        self.channel.receivers = []
 
     def now(self):
         return self.clock()
@@ -169,7 +267,7 @@ class World:
         emu, host, dev = self.modem_ends(modem, addr, emu_opts, position)
         sn = SimNode(name, None, None, None, host, dev, addr)
         node = Node(name, node_id, self.clock, listener=listener or sn.events.append)
-        for other in self._order:
+        for other in self._order if self.share_names else ():
             node.names.add(other.name, other.node.node_id)
             other.node.names.add(name, node_id)
         if track is not None:
@@ -179,9 +277,16 @@ class World:
         node.add_link(link, MacDriver(driver, mac) if mac is not None else driver, host, **lo)
         sn.node, sn.driver, sn.emu = node, driver, emu
         sn.step = node.step
+        self._join(name, sn)
+        return sn
+
+    def _join(self, name, sn):
+        sn.index = len(self._order)
         self.nodes[name] = sn
         self._order.append(sn)
-        return sn
+        self._by_station[id(sn.emu)] = sn
+        sn.can_sleep = self.fast and _sleeps(sn.emu)
+        self._active.append(sn)
 
     def add_link(self, name, link, modem, address=None, driver_opts=None, emu_opts=None, link_opts=None):
         # a second (third...) interface for node `name`: e.g. a buoy with a
@@ -196,7 +301,9 @@ class World:
         lo.update(link_opts or {})
         lk = sn.node.add_link(link, driver, host, **lo)
         sn.extra.append([lk, driver, emu, host, dev])
-        sn.wake = None
+        self._by_station[id(emu)] = sn
+        sn.can_sleep = sn.can_sleep and _sleeps(emu)
+        self.wake(sn)
         return lk
 
     def modem_ends(self, modem, address, emu_opts=None, position=None):
@@ -236,8 +343,10 @@ class World:
                 other.node.names.add(name, node.node_id)
         if events is not None:
             sn.events = events
-        self.nodes[name] = sn
-        self._order.append(sn)
+        self._join(name, sn)
+        for x in sn.extra:
+            self._by_station[id(x[2])] = sn
+            sn.can_sleep = sn.can_sleep and _sleeps(x[2])
         return sn
 
     def add_task(self, task):
@@ -256,8 +365,55 @@ class World:
                 ran = True
         if ran:
             # a task may have given any node work: wake them all this step
-            for sn in self._order:
-                sn.wake = None
+            self._wake_all()
+
+    def wake(self, sn):
+        """Steps node `sn` at the next step (after its state was changed from outside)."""
+        sn.wake = None
+        if sn.asleep:
+            sn.asleep = False
+            self._active.append(sn)
+            self._sorted = False
+
+    def _wake_all(self):
+        for sn in self._order:
+            sn.wake = None
+        if self._sleeping:
+            self._active = list(self._order)
+            self._sorted = True
+            for sn in self._active:
+                sn.asleep = False
+            self._sleeping = []
+
+    def _sleep(self, sn, now, until):
+        # off the active list until `until` (or a packet, a task, run())
+        if not self._sleeping:
+            self._base = now
+        sn.asleep = True
+        sn.sleep_wake = until
+        sn.sleep_key = ticks_diff(until, self._base)
+        heapq.heappush(self._sleeping, (sn.sleep_key, sn.index, sn))
+
+    def _first_sleeper(self):
+        # the sleeping node that wakes first (stale heap entries dropped)
+        h = self._sleeping
+        while h:
+            k, _, sn = h[0]
+            if sn.asleep and sn.sleep_key == k:
+                return sn
+            heapq.heappop(h)
+        return None
+
+    def _wake_due(self, now):
+        # sleeping nodes whose wake-up has come join the active list
+        while True:
+            sn = self._first_sleeper()
+            if sn is None or ticks_diff(now, sn.sleep_wake) < 0:
+                return
+            heapq.heappop(self._sleeping)
+            sn.asleep = False
+            self._active.append(sn)
+            self._sorted = False
 
     def _extra_bytes(self, sn):
         for x in sn.extra:
@@ -274,7 +430,7 @@ class World:
                 return None
         link = sn.link
         if not link.idle(now):
-            return None
+            return idlesteps.busy_wake(sn, link, now) if self.fast else None
         d = link.driver
         queued = len(link.queue)
         cap = ticks_add(now, self.max_quiet_ms)
@@ -282,23 +438,39 @@ class World:
             if not d.driver.ready(now):
                 return None
             if not queued:
-                return cap
+                return idlesteps.idle_wake(sn, link, now, self.max_quiet_ms) if self.fast else cap
             if d.mac.may_start(now):
                 return None
             wake = d.mac.next_start(now)
-            return wake if wake is not None and ticks_diff(wake, cap) < 0 else cap
+            if wake is not None and ticks_diff(wake, cap) < 0:
+                return wake
+            if wake is not None and self.fast and isinstance(d.mac, idlesteps.MACS):
+                w = idlesteps.slot_wake(sn, link, now, wake, self.max_quiet_ms)
+                if w is not None:
+                    return w
+            return cap
         if queued or not d.ready(now):
             return None
-        return cap
+        if d.__class__ is MacDriver:
+            d = d.driver
+        return idlesteps.idle_wake(sn, link, now, self.max_quiet_ms) if self.fast and isinstance(d, TransparentDriver) else cap
 
     def step(self):
         now = self.clock()
         ch = self.channel
         if self._tasks:
             self._run_tasks(now)
-        for sn in self._order:
+        if self._sleeping:
+            self._wake_due(now)
+        if not self._sorted:
+            self._active.sort(key=_index)
+            self._sorted = True
+        active = self._active
+        for sn in active:
             w = sn.wake
             if w is None or ticks_diff(now, w) >= 0 or sn.host_end.any() or self._extra_bytes(sn):
+                if sn.replay is not None:
+                    _catch_up(sn, now)
                 sn.step(now)
                 sn.wake = self._quiet_until(sn, now)
                 self.node_steps += 1
@@ -310,7 +482,20 @@ class World:
         for e in self._loose:
             _modem_in(now, e[0], e[2])
         ch.poll(now)
-        for sn in self._order:
+        heard = ch.receivers
+        if heard:
+            # a packet reached a sleeping node's modem: its output goes out now
+            for emu in heard:
+                sn = self._by_station.get(id(emu))
+                if sn is not None and sn.asleep:
+                    sn.asleep = False
+                    active.append(sn)
+                    self._sorted = False
+            del heard[:]
+            if not self._sorted:
+                active.sort(key=_index)
+                self._sorted = True
+        for sn in active:
             _modem_out(sn.emu, sn.modem_end)
             for x in sn.extra:
                 _modem_out(x[2], x[4])
@@ -318,12 +503,27 @@ class World:
             _modem_out(e[0], e[2])
         self.clock.advance(self.step_ms)
         self.steps += 1
+        # nodes with a wake-up and quiet modems go to sleep
+        now = self.clock()
+        keep = None
+        for i in range(len(active)):
+            sn = active[i]
+            until = _sleep_until(now, sn) if sn.can_sleep else None
+            if until is not None:
+                if keep is None:
+                    keep = active[:i]
+                self._sleep(sn, now, until)
+            elif keep is not None:
+                keep.append(sn)
+        if keep is not None:
+            self._active = keep
 
-    def _all_quiet_until(self, now):
-        # When every node sleeps, nothing is on the channel or the lines,
-        # and every emulator says it is idle, nothing can happen before the
-        # earliest wake-up: the clock may jump there. None when it cannot.
-        if self.channel.in_flight():
+    def _all_quiet_until(self, now, flights=False):
+        # When every node sleeps, nothing is on the lines, every emulator
+        # says it is idle and (unless `flights`) nothing is on the channel,
+        # nothing can happen before the earliest wake-up (or arrival): the
+        # clock may jump there. None when it cannot.
+        if self.channel.in_flight() and not flights:
             return None
         first = None
         for t in self._tasks:
@@ -332,42 +532,62 @@ class World:
                 return None
             if first is None or ticks_diff(w, first) < 0:
                 first = w
-        for sn in self._order:
+        for sn in self._active:
             w = sn.wake
             if w is None:
                 return None
-            if not _modem_quiet(now, sn.emu, sn.host_end, sn.modem_end):
+            if not _node_quiet(now, sn):
                 return None
-            for x in sn.extra:
-                if not _modem_quiet(now, x[2], x[3], x[4]):
-                    return None
             if first is None or ticks_diff(w, first) < 0:
                 first = w
         for e in self._loose:
             if not _modem_quiet(now, e[0], e[1], e[2]):
                 return None
+        sn = self._first_sleeper()
+        if sn is not None and (first is None or ticks_diff(sn.sleep_wake, first) < 0):
+            first = sn.sleep_wake
+        if flights and self.channel.in_flight():
+            a = self.channel.next_arrival()
+            if first is None or ticks_diff(a, first) < 0:
+                first = a
         return first
 
     def run(self, ms, until=None):
         """Runs `ms` of simulated time, or until until() is true (-> True)."""
         end = ticks_add(self.clock(), ms)
-        for sn in self._order:
-            sn.wake = None  # the caller may have given them work
+        self._wake_all()  # the caller may have given them work
         for t in self._tasks:
             t[1] = None
         clk = self.clock
+        ch = self.channel
+        # Without until(), the clock may also jump while packets are on
+        # their way (until() may look at the time of each step)
+        flights = until is None and self.fast
         while ticks_diff(end, clk()) > 0:
             self.step()
             if until is not None and until():
+                self._catch_up_all()
                 return True
             now = clk()
-            w = self._all_quiet_until(now)
+            w = self._all_quiet_until(now, flights)
             if w is not None:
                 if ticks_diff(w, end) > 0:
                     w = end
                 # stay on the grid of steps
                 k = ticks_diff(w, now) // self.step_ms
                 if k > 0:
+                    if ch.in_flight():
+                        # the steps skipped would each have polled the
+                        # channel with nothing arriving: the last one counts
+                        ch.poll(ticks_add(now, (k - 1) * self.step_ms))
                     clk.advance(k * self.step_ms)
                     self.jumped_ms += k * self.step_ms
+        self._catch_up_all()
         return until is None
+
+    def _catch_up_all(self):
+        # at the end of a run, the MAC questions of the steps skipped before it
+        now = self.clock()
+        for sn in self._order:
+            if sn.replay is not None:
+                _catch_up(sn, now)

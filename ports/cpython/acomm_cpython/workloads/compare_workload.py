@@ -163,6 +163,7 @@ def run(emit, speed=True, slow=True):
     if slow:
         _transfer(emit)
         _footprint(emit)
+        _simulator(emit)
 
 
 def _micropython_speed(emit):
@@ -192,6 +193,21 @@ def _transfer(emit):
             a = seen["goodput_ratio_%s_%d" % (modem, pct)]
             s = seen["goodput_ratio_stopwait_%s_%d" % (modem, pct)]
             emit("transfer_arq_over_saw_%s_%d" % (modem, pct), round(a / s, 3), "ratio")
+
+
+def _simulator(emit):
+    # the simulator's speed and scale (sim_workload) and a sweep's speed-up
+    # on 2 Dask workers (sweep_workload, when Dask is installed)
+    from acomm_cpython.workloads import sim_workload as sw
+    from acomm_cpython.workloads import sweep_workload
+
+    _, wall, _ = sw.run_once("tdma")
+    emit("sim_speedup_16_nodes", round(sw.SIM_S / wall, 1), "x")
+    sw.run_scales(lambda n, v, u: emit(n, round(v, 4) if isinstance(v, float) else v, u))
+    try:
+        sweep_workload.run(lambda n, v, u: emit(n, round(v, 3), u))
+    except RuntimeError as e:
+        print("note: %s" % e, file=sys.stderr)
 
 
 def _footprint(emit):

@@ -20,9 +20,20 @@
 #   caddy_cycle_propagation_s    sound's way out and back in the four pairs,
 #                                which the seed's budget leaves out
 #   caddy_cycle_seen_*           the same with the diver in sonar (7.64 s)
+#
+# And the scale runs (scale_world below): 16, 64 and 256 nodes with the same
+# load per node, ten simulated minutes each, three times (interleaved; the
+# fastest of the three counts):
+#   sim_cost_<n>_nodes           CPU ms (this process's) per simulated second
+#   sim_heard_per_frame_<n>_nodes  copies of a frame delivered, on average
+#   sim_cost_ratio_64_vs_16, sim_cost_ratio_256_vs_64   their ratios (4 is
+#                                linear in the number of nodes)
+#   sim_memory_256_nodes         tracemalloc's peak while building the
+#                                256-node world and running it a minute
 import time
 
 from acomm.drivers.mac import Aloha, Tdma
+from acomm_sim.channel import Channel
 from acomm.events import EV_RECEIVED
 from acomm_sim.world import World
 
@@ -58,6 +69,66 @@ def run_once(kind, seed=1):
     wall = time.perf_counter() - t0
     rx = sum(1 for sn in w.nodes.values() for e in sn.events if e[0] == EV_RECEIVED)
     return w, wall, rx / (sent * (NODES - 1))
+
+
+# The scale runs: the same per-node load on 16, 64 and 256 nodes, so that
+# the wall time per simulated second shows how the simulator's cost grows
+# with the network. Nodes on a square grid 400 m apart, BPSK modems, a loss
+# curve that ends in certain loss at 600 m (each node hears at most its 8
+# nearest: 4 at 400 m, 4 at 566 m; fewer on the grid's edges), ALOHA with
+# a backoff of up to 16 airtimes, a 20-byte broadcast per node and minute.
+# acomm's node ids are 1..254: the 256-node grid gives ids 1 and 2 a second
+# time to its last two nodes, 8 km from the first two (modem addresses
+# stay distinct). Names are not shared (a node's table holds 64).
+SCALE_SPACING_M = 400.0
+SCALE_LOSS_CURVE = ((0.0, 0.02), (400.0, 0.05), (600.0, 0.3), (601.0, 1.0))
+SCALE_SIM_S = 600
+SCALE_NODES = (16, 64, 256)
+SCALE_ROUNDS = 3
+
+
+def scale_world(nodes, seed=1):
+    side = 1
+    while side * side < nodes:
+        side += 1
+    air = airtime_ms()
+    w = World(seed=seed, channel=Channel(seed=seed, loss_curve=SCALE_LOSS_CURVE), share_names=False)
+    for i in range(nodes):
+        pos = (SCALE_SPACING_M * (i % side), SCALE_SPACING_M * (i // side), 10.0)
+        w.add("n%d" % (i + 1), i % 254 + 1, "bpsk", address=i + 1, position=pos,
+              mac=Aloha(16 * air, seed=seed * 1000 + i),
+              link_opts={"advert_period_ms": 600000, "queue_capacity": 8})
+    return w
+
+
+def run_scale(nodes, sim_s=SCALE_SIM_S, seed=1):
+    # -> (world, CPU seconds of this process, copies delivered per frame)
+    w = scale_world(nodes, seed)
+    t0 = time.process_time()
+    sent = 0
+    for minute in range(sim_s // PERIOD_S):
+        for sn in w.nodes.values():
+            sn.node.send("acoustic", "*", bytes([minute & 0xFF]) * PAYLOAD, PERIOD_S, 5)
+            sent += 1
+        w.run(PERIOD_S * 1000)
+    wall = time.process_time() - t0
+    rx = sum(1 for sn in w.nodes.values() for e in sn.events if e[0] == EV_RECEIVED)
+    return w, wall, rx / sent
+
+
+def scale_memory(nodes, sim_s=PERIOD_S, seed=1):
+    # tracemalloc's peak for building the world and running it (a separate
+    # run: tracing slows the timed runs down)
+    import gc
+    import tracemalloc
+
+    gc.collect()
+    tracemalloc.start()
+    w, _, _ = run_scale(nodes, sim_s, seed)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    del w
+    return peak
 
 
 CADDY_POS = {1: (-35.0, 5.0, 0.5), 2: (25.0, 20.0, 10.0), 3: (10.0, -25.0, 12.0)}
@@ -103,9 +174,31 @@ def run_caddy(emit):
         emit("caddy_timeouts%s" % tag, sum(c["timeouts"] for c in cyc.counters), "steps")
 
 
+def run_scales(emit, rounds=SCALE_ROUNDS):
+    # each size runs `rounds` times, the sizes interleaved, and each figure
+    # is the size's fastest run: on a machine shared with other work single
+    # runs moved the ratios between 2.6 and 6.2
+    best = {}
+    heard = {}
+    for _ in range(rounds):
+        for n in SCALE_NODES:
+            _, wall, heard[n] = run_scale(n)
+            if n not in best or wall < best[n]:
+                best[n] = wall
+    cost = {}
+    for n in SCALE_NODES:
+        cost[n] = best[n] * 1000 / SCALE_SIM_S
+        emit("sim_cost_%d_nodes" % n, cost[n], "ms/s")
+        emit("sim_heard_per_frame_%d_nodes" % n, heard[n], "copies")
+    emit("sim_cost_ratio_64_vs_16", cost[64] / cost[16], "ratio")
+    emit("sim_cost_ratio_256_vs_64", cost[256] / cost[64], "ratio")
+    emit("sim_memory_256_nodes", scale_memory(256), "B")
+
+
 def run(emit):
     w, wall, pdr = run_once("tdma")
     emit("sim_speedup_16_nodes", SIM_S / wall, "x")
+    run_scales(emit)
     emit("tdma_collisions", w.channel.collided, "copies")
     emit("tdma_pdr", pdr, "ratio")
     w, wall, pdr = run_once("aloha")

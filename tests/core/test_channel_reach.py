@@ -1,0 +1,58 @@
+# The Channel's shortcut for stations out of reach (beyond where its loss
+# curve becomes certain: no distance worked out, the same generator draws)
+# changes nothing: the same transmissions give the same deliveries, the
+# same counters and the same generator state as on a Channel that works
+# out every distance. Stationary nodes on a grid and scattered, nodes
+# without a position, a node that moves; with and without a fixed loss.
+from acomm.prng import Prng
+from acomm_sim.channel import Channel, Track
+
+
+class Ear:
+    def __init__(self, log, me):
+        self.log = log
+        self.me = me
+
+    def receive(self, t, src, packet, distance):
+        self.log.append((t, src, self.me, int(distance * 1000)))
+
+
+class EveryDistance(Channel):
+    def _near_of(self, src):
+        return None  # the Medium's way: every station's distance
+
+
+def _run(cls, seed, layout, loss):
+    rng = Prng(seed)
+    ch = cls(seed=seed, loss=loss, loss_curve=((0.0, 0.0), (300.0, 0.5), (500.0, 1.0)))
+    log = []
+    n = 24
+    for a in range(1, n + 1):
+        ch.attach(a, Ear(log, a))
+        if layout == "grid":
+            ch.set_position(a, 250.0 * (a % 5), 250.0 * (a // 5), 5.0)
+        elif layout == "scattered" and a % 9:
+            ch.set_position(a, rng.below(3000) - 1500.0, rng.below(3000) - 1500.0, rng.below(50))
+    if layout == "moving":
+        for a in range(1, n + 1):
+            ch.set_position(a, 200.0 * a, 0.0, 0.0)
+        ch.set_track(3, Track((0.0, 0.0, 0.0), 0, velocity=(2.0, 0.0, 0.0)))
+    t = 0
+    for k in range(120):
+        t += rng.below(400)
+        src = 1 + rng.below(n)
+        ch.transmit(t, src, b"%d" % k, 100 + rng.below(300))
+        ch.poll(t)
+        if k == 60 and layout == "grid":
+            ch.set_position(5, 10.0, 10.0, 0.0)  # a node moved: reach again
+    ch.poll(t + 100000)
+    return log, [getattr(ch, c) for c in ("sent", "delivered", "lost", "range_lost", "collided", "deaf")], ch.rng.next32()
+
+
+def test_stations_out_of_reach_take_the_same_draws():
+    for layout in ("grid", "scattered", "moving"):
+        for seed, loss in ((1, 0.0), (2, 0.1)):
+            fast = _run(Channel, seed, layout, loss)
+            slow = _run(EveryDistance, seed, layout, loss)
+            assert fast == slow, (layout, seed, loss)
+            assert fast[1][1] > 0 and fast[1][3] > 0  # some arrive, some are out of reach
