@@ -116,6 +116,23 @@ def _batch(coder):
         k *= 2
 
 
+def time_rounds(coders, rounds):
+    """{name: [microseconds per encode + decode, one per round]}: each coder's batch timed in turn,
+    the order rotating every round, so a slow moment of the machine falls on every coder alike."""
+    order = list(coders)
+    sizes = {c: _batch(coders[c]) for c in order}
+    per = {c: [] for c in order}
+    for r in range(rounds):
+        k = r % len(order)
+        for c in order[k:] + order[:k]:
+            coder, n = coders[c], sizes[c]
+            t0 = now_us()
+            for _ in range(n):
+                coder.decode(coder.encode())
+            per[c].append(elapsed_us(t0) / n)
+    return per
+
+
 def speed_records(peers, rounds=ROUNDS):
     # Per item, acomm and every peer time one batch each per round, in an
     # order that rotates every round (no coder always runs first, after the
@@ -130,17 +147,7 @@ def speed_records(peers, rounds=ROUNDS):
         for p in peers:
             coders[p] = _PeerCoder(peers[p], name, peers[p].prepare(name, vals[name]))
         cs.check(name, ours[name])
-        order = list(coders)
-        sizes = {c: _batch(coders[c]) for c in order}
-        per = {c: [] for c in order}
-        for r in range(rounds):
-            k = r % len(order)
-            for c in order[k:] + order[:k]:
-                coder, n = coders[c], sizes[c]
-                t0 = now_us()
-                for _ in range(n):
-                    coder.decode(coder.encode())
-                per[c].append(elapsed_us(t0) / n)
+        per = time_rounds(coders, rounds)
         base = _median(per["acomm"])
         for p in peers:
             out.append(("speed_%s_%s" % (name, p), round(base / _median(per[p]), 3), "x acomm"))

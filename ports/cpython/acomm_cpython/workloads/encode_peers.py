@@ -5,8 +5,7 @@
 # fastest round: on a machine shared with other work the median moved by a
 # factor of 3 from run to run, the fastest round by a few per cent.
 from acomm_cpython.workloads import compare_peers as cp
-from acomm_cpython.workloads.compare_workload import ROUNDS, _batch, _PeerCoder
-from acomm_cpython.workloads.timer import elapsed_us, now_us
+from acomm_cpython.workloads.compare_workload import ROUNDS, _PeerCoder, time_rounds
 
 PEERS = ("cbor", "ltcodecs")
 
@@ -22,21 +21,11 @@ def peer_ratios(items, ours, rounds=ROUNDS):
                 coders[p] = _PeerCoder(peers[p], name, peers[p].prepare(name, items[name]))
             except TypeError:  # a field kind the peer has no codec for
                 continue
-        order = list(coders)
-        for c in order:  # warm up (CPython specialises code that runs often)
+        for c in coders:  # warm up (CPython specialises code that runs often)
             for _ in range(3000):
                 coders[c].decode(coders[c].encode())
-        sizes = {c: _batch(coders[c]) for c in order}
-        per = {c: [] for c in order}
-        for r in range(rounds):
-            k = r % len(order)
-            for c in order[k:] + order[:k]:
-                coder, n = coders[c], sizes[c]
-                t0 = now_us()
-                for _ in range(n):
-                    coder.decode(coder.encode())
-                per[c].append(elapsed_us(t0) / n)
+        per = time_rounds(coders, rounds)
         base = min(per["acomm"])
-        for p in order[1:]:
+        for p in list(coders)[1:]:
             out.append(("encode_decode_%s_over_acomm_%s" % (p, name), round(base / min(per[p]), 3), "x acomm"))
     return out
