@@ -168,13 +168,7 @@ def main(args):
         if w is not None and not args.web:
             # the board's own console field, as on the board
             args.web = "%s:%d" % (w["host"], w["port"])
-        web, wrap = nodeloop.start_web(args, node, out, w["password"] if w is not None else None)
-        if web is not None:
-            closers.append(web)
-            tick = wrap(tick)
-            # typed lines and the page's commands, one at a time
-            console.command = wrap(console.command)
-            console.poll = wrap(console.poll)
+        tick = nodeloop.with_web(args, node, out, console, tick, closers, w["password"] if w is not None else None)
         nodeloop.wait_started(tick, watches, out, args.startup_timeout)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds)

@@ -218,14 +218,8 @@ def main(args):
             os.makedirs(args.inbox, exist_ok=True)
         console = Console(node, transport, out, args.lifespan, args.inbox, wheres)
         node.listen(console.on_event)
-        web, wrap = nodeloop.start_web(args, node, out)
-        tick = node.step
-        if web is not None:
-            closers.append(web)
-            tick = wrap(tick)
-            # typed lines, the --send list and the page's commands, one at a time
-            console.command = wrap(console.command)
-            console.poll = wrap(console.poll)
+        # typed lines, the --send list and the page's commands, one at a time
+        tick = nodeloop.with_web(args, node, out, console, node.step, closers)
         nodeloop.wait_started(tick, watches, out, args.startup_timeout)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         pending = [keyval(m) for m in args.send]

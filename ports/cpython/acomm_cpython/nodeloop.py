@@ -189,6 +189,18 @@ def start_web(args, node, out, password=None):
     return web, wrap
 
 
+def with_web(args, node, out, console, tick, closers, password=None):
+    """--web beside the typed-line console: the server joins closers, and the loop's tick and the
+    console's command and poll run one at a time under its lock -> the tick to run."""
+    web, wrap = start_web(args, node, out, password)
+    if web is None:
+        return tick
+    closers.append(web)
+    console.command = wrap(console.command)
+    console.poll = wrap(console.poll)
+    return wrap(tick)
+
+
 def open_store(path_dir, capacity=1 << 22, max_record=1024):
     """The transport's persistent store in folder path_dir (made when missing)."""
     from acomm.transport.store import Store
