@@ -2,18 +2,19 @@
 # produces exactly the events the test asks for. Used to reach every state of
 # the link (modem acks, failures, ranging) without a modem.
 
+from acomm.drivers.base import SansIO
 from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
 from acomm.events import EV_DELIVERED, EV_DRIVER_UP, EV_RANGE, EV_RX, EV_TX_DONE, EV_TX_FAILED
 
 MODEM_FLAGS = CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING
 
 
-class ScriptedDriver:
+class ScriptedDriver(SansIO):
     def __init__(self, flags=MODEM_FLAGS, mtu=32, broadcast_addr=0):
         self.caps = Capabilities("test", "scripted", mtu_tx=mtu, mtu_rx=mtu, bitrate=100, latency_ms=1000, flags=flags)
         self.broadcast_addr = broadcast_addr
+        SansIO.__init__(self)
         self.sent = []  # (handle, addr, data, ack) or (handle, "ping", addr)
-        self._events = []
         self._h = 0
         self.busy = None
 
@@ -37,14 +38,6 @@ class ScriptedDriver:
 
     def poll(self, now):
         pass
-
-    def take_events(self):
-        ev = self._events
-        self._events = []
-        return ev
-
-    def take_output(self):
-        return b""
 
     # -- what the test makes happen ------------------------------------------
     def finish(self, handle=None):

@@ -16,6 +16,7 @@ from acomm import frame as fr
 from acomm.transport import segment as sg
 from acomm.apps.policy import commands
 from acomm.frame.auth import Auth
+from acomm.drivers.base import SansIO
 from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, Capabilities
 from acomm.events import DELIVERED, EV_PACKET_STATUS, EV_STATUS, FAILED
 from acomm.link.framing import LinkFraming
@@ -29,14 +30,14 @@ from .fuzz import Failure
 KEY = b"fuzzing the control plane, 32 b"
 
 
-class _Modem:
+class _Modem(SansIO):
     # an elided modem without its own acks: what the link sends is kept
     def __init__(self):
+        SansIO.__init__(self)
         self.caps = Capabilities("fuzz", "modem", mtu_tx=31, mtu_rx=31, bitrate=100, latency_ms=1000,
                                  flags=CAP_ADDRESSING | CAP_BROADCAST)
         self.broadcast_addr = 0
         self._h = 0
-        self.events = []
 
     def ready(self, now):
         return True
@@ -45,7 +46,7 @@ class _Modem:
         self._h += 1
         from acomm.events import EV_TX_DONE
 
-        self.events.append((EV_TX_DONE, self._h))
+        self._events.append((EV_TX_DONE, self._h))
         return self._h
 
     def feed(self, now, data):
@@ -54,13 +55,6 @@ class _Modem:
     def poll(self, now):
         pass
 
-    def take_events(self):
-        ev = self.events
-        self.events = []
-        return ev
-
-    def take_output(self):
-        return b""
 
 
 def _corpus():
