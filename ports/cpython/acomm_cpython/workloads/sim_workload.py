@@ -60,12 +60,7 @@ def run_once(kind, seed=1):
         w.add("n%d" % (i + 1), i + 1, "bpsk", position=(50.0 * i, 0.0, 10.0), mac=mac,
               link_opts={"advert_period_ms": 600000, "queue_capacity": 8})
     t0 = time.perf_counter()
-    sent = 0
-    for minute in range(SIM_S // PERIOD_S):
-        for sn in w.nodes.values():
-            sn.node.send("acoustic", "*", bytes([minute & 0xFF]) * PAYLOAD, PERIOD_S, 5)
-            sent += 1
-        w.run(PERIOD_S * 1000)
+    sent = _broadcast_each_minute(w, SIM_S)
     wall = time.perf_counter() - t0
     rx = sum(1 for sn in w.nodes.values() for e in sn.events if e[0] == EV_RECEIVED)
     return w, wall, rx / (sent * (NODES - 1))
@@ -101,16 +96,22 @@ def scale_world(nodes, seed=1):
     return w
 
 
-def run_scale(nodes, sim_s=SCALE_SIM_S, seed=1):
-    # -> (world, CPU seconds of this process, copies delivered per frame)
-    w = scale_world(nodes, seed)
-    t0 = time.process_time()
+def _broadcast_each_minute(w, sim_s):
+    # every node broadcasts one frame a minute for sim_s simulated seconds -> frames sent
     sent = 0
     for minute in range(sim_s // PERIOD_S):
         for sn in w.nodes.values():
             sn.node.send("acoustic", "*", bytes([minute & 0xFF]) * PAYLOAD, PERIOD_S, 5)
             sent += 1
         w.run(PERIOD_S * 1000)
+    return sent
+
+
+def run_scale(nodes, sim_s=SCALE_SIM_S, seed=1):
+    # -> (world, CPU seconds of this process, copies delivered per frame)
+    w = scale_world(nodes, seed)
+    t0 = time.process_time()
+    sent = _broadcast_each_minute(w, sim_s)
     wall = time.process_time() - t0
     rx = sum(1 for sn in w.nodes.values() for e in sn.events if e[0] == EV_RECEIVED)
     return w, wall, rx / sent
