@@ -67,31 +67,13 @@ def _shifts(cur, n):
 
 def encode(w, values, p):
     """Writes the body; the errors of Message.encode_body, with their paths."""
-    acc, n = _fold(p, values, 0, 0, w)
-    if n:
-        w.write(acc, n)
-
-
-def pack_one(msg_id, id_bits, values, p, max_bits):
-    """One message's frame (id + body, zero-padded) -> bytes, or None when
-    it may be longer than _WHOLE bits; the errors of Message.encode_body."""
-    if id_bits + max_bits > _WHOLE:
-        return None
-    acc, n = _fold(p, values, msg_id, id_bits, None)
-    pad = (8 - (n & 7)) & 7
-    return (acc << pad).to_bytes((n + pad) >> 3, "big")
-
-
-def _fold(p, values, acc, n, w):
-    # The fields' codes appended to the n bits in acc -> (acc, n). With a
-    # writer w, whole words go to it before acc would pass _MAX_ACC bits
-    # (None: the caller knows the total fits one integer). The errors of
-    # Message.encode_body, with the failing field's path.
+    acc = 0
+    n = 0
     name = None
     try:
         for name, s, opt, bits in p:
             v = values[name]
-            if w is not None and n + bits >= _MAX_ACC:
+            if n + bits >= _MAX_ACC:
                 w.write(acc, n)
                 acc = 0
                 n = 0
@@ -112,7 +94,40 @@ def _fold(p, values, acc, n, w):
         if name is None or not isinstance(values, dict):
             raise fail(EncodeError, "values must be a dict, not %s" % type(values).__name__) from None
         raise fail(EncodeError, "bad value %r" % (values.get(name),), name) from None
-    return acc, n
+    if n:
+        w.write(acc, n)
+
+
+def pack_one(msg_id, id_bits, values, p, max_bits):
+    """One message's frame (id + body, zero-padded) -> bytes, or None when
+    it may be longer than _WHOLE bits; the errors of Message.encode_body."""
+    if id_bits + max_bits > _WHOLE:
+        return None
+    acc = msg_id
+    n = id_bits
+    name = None
+    try:
+        for name, s, opt, bits in p:
+            v = values[name]
+            if opt:
+                if v is None:
+                    acc <<= 1
+                    n += 1
+                    continue
+                acc = (acc << 1) | 1
+                n += 1
+            acc = (acc << bits) | s.code(v)
+            n += bits
+    except EncodeError as e:
+        raise pathed(e, name) from None
+    except KeyError:
+        raise fail(EncodeError, "missing", name) from None
+    except (TypeError, ValueError, AttributeError, IndexError):
+        if name is None or not isinstance(values, dict):
+            raise fail(EncodeError, "values must be a dict, not %s" % type(values).__name__) from None
+        raise fail(EncodeError, "bad value %r" % (values.get(name),), name) from None
+    pad = (8 - (n & 7)) & 7
+    return (acc << pad).to_bytes((n + pad) >> 3, "big")
 
 
 def unpack_one(by_id, id_bits, buf, nbits):
