@@ -9,6 +9,7 @@
 import os
 import queue
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -134,3 +135,12 @@ class Water:
     def __exit__(self, *exc):
         if self.proc.p.poll() is None:
             self.close()
+
+
+def free_port():
+    """A TCP port on loopback that nothing listens on now (for a server a test starts)."""
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port

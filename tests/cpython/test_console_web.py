@@ -25,17 +25,11 @@ import pytest
 from acomm_web import page as webpage
 from acomm_web.host import WebHost, paced, parse_web, read_password
 from acomm_web.sample import build
+from consoleprocs import free_port
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 MP = os.path.join(os.path.dirname(sys.executable), "micropython")
 
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 def request(port, method, path, body=None, headers=None):
