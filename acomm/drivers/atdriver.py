@@ -33,8 +33,8 @@ from .base import S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
 _EV_DRIVER_DOWN = const(7)
 _EV_DRIVER_UP = const(6)
 
-T_CONFIG = const(1)
-T_CSQ = const(2)
+_T_CONFIG = const(1)
+_T_CSQ = const(2)
 # the subclasses number their own command tags from 10
 
 
@@ -107,7 +107,7 @@ class AtDriver(SlotDriver):
                 self._wait = None
             text, _, tmo = self.steps[self._step]
             self._step_seen = False
-            at.command(now, text, T_CONFIG, tmo or self.cmd_timeout_ms, numeric=not self._echo_off)
+            at.command(now, text, _T_CONFIG, tmo or self.cmd_timeout_ms, numeric=not self._echo_off)
             return
         if self._work(now):
             return
@@ -127,7 +127,7 @@ class AtDriver(SlotDriver):
 
     def poll_signal(self, now):
         self._csq_at = ticks_add(now, self.csq_period_ms if self.signal_ok else self.csq_retry_ms)
-        self.at.command(now, b"AT+CSQ", T_CSQ, self.csq_timeout_ms)
+        self.at.command(now, b"AT+CSQ", _T_CSQ, self.csq_timeout_ms)
 
     def signal_soon(self, now):
         # read the signal before the next session (after a failed one)
@@ -190,10 +190,10 @@ class AtDriver(SlotDriver):
             self._silent += 1
         else:
             self._silent = 0
-        if tag == T_CONFIG:
+        if tag == _T_CONFIG:
             self._config_result(now, code, line)
             return
-        if tag != T_CSQ:
+        if tag != _T_CSQ:
             self._result(now, tag, code, line)
         if self._silent >= self.down_after and self._state == S_UP:
             self.lost(now, "modem not answering")
@@ -210,7 +210,7 @@ class AtDriver(SlotDriver):
             self.set_signal(self._now, v)
             self._step_seen = True
             return
-        if tag == T_CONFIG:
+        if tag == _T_CONFIG:
             want = self.steps[self._step][1]
             if want is not None and line.startswith(want):
                 self._step_seen = True

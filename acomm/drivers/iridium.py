@@ -43,16 +43,16 @@ _EV_TX_DONE = const(2)
 _EV_TX_FAILED = const(4)
 
 # slot states after base's IDLE and QUEUED
-WRITING = const(2)
-LOADED = const(3)
-SESSION = const(4)
+_WRITING = const(2)
+_LOADED = const(3)
+_SESSION = const(4)
 
-K_MO = const(0)
+_K_MO = const(0)
 
-T_WB = const(10)
-T_IX = const(11)
-T_RB = const(12)
-T_DD = const(13)
+_T_WB = const(10)
+_T_IX = const(11)
+_T_RB = const(12)
+_T_DD = const(13)
 
 _CLEAR_TRIES = const(3)
 
@@ -169,7 +169,7 @@ class IridiumDriver(AtDriver):
         self._sessions = 0
         self._wait = 0
         self._wb_fails = 0
-        return self._accept(now, K_MO, addr, data)
+        return self._accept(now, _K_MO, addr, data)
 
     parse_signal = staticmethod(w.parse_csq)
 
@@ -180,7 +180,7 @@ class IridiumDriver(AtDriver):
     # -- what to do next -------------------------------------------------------------
     def _tick(self, now):
         s = self.slot
-        if (s.state == QUEUED or s.state == LOADED) and ticks_diff(now, self._first_at) >= self.give_up_ms:
+        if (s.state == QUEUED or s.state == _LOADED) and ticks_diff(now, self._first_at) >= self.give_up_ms:
             why = self.stuck_reason() or self.last_failure or "no session"
             self._fail("%s (gave up after %d sessions)" % (why, self._sessions))
 
@@ -193,23 +193,23 @@ class IridiumDriver(AtDriver):
             self._mailbox_at = ticks_add(now, self.mailbox_check_ms)
         if self._mt_unread:
             self._rb_good = False
-            at.command(now, b"AT+SBDRB", T_RB, self.cmd_timeout_ms, block=True)
+            at.command(now, b"AT+SBDRB", _T_RB, self.cmd_timeout_ms, block=True)
             return True
         if self._mo_loaded and s.state == IDLE:
             self._status = None
-            at.command(now, b"AT+SBDD0", T_DD, self.cmd_timeout_ms)
+            at.command(now, b"AT+SBDD0", _T_DD, self.cmd_timeout_ms)
             return True
         if s.state == QUEUED:
-            s.state = WRITING
+            s.state = _WRITING
             self._status = None
-            at.command(now, b"AT+SBDWB=%d" % (len(self.mo_prefix) + s.n), T_WB, self.cmd_timeout_ms,
+            at.command(now, b"AT+SBDWB=%d" % (len(self.mo_prefix) + s.n), _T_WB, self.cmd_timeout_ms,
                        prompt=b"READY", ends=(b"1",))
             return True
         if not self.signal_ok:
             return False
-        if s.state == LOADED:
+        if s.state == _LOADED:
             if self._ring or ticks_diff(now, self._next_at) >= 0:
-                s.state = SESSION
+                s.state = _SESSION
                 self._session(now)
                 return True
             return False
@@ -227,14 +227,14 @@ class IridiumDriver(AtDriver):
     def _session(self, now):
         self._ix = None
         self.stats["sessions"] += 1
-        self.at.command(now, b"AT+SBDIXA" if self._ring else b"AT+SBDIX", T_IX, self.sbdix_timeout_ms)
+        self.at.command(now, b"AT+SBDIXA" if self._ring else b"AT+SBDIX", _T_IX, self.sbdix_timeout_ms)
 
     # -- answers ---------------------------------------------------------------------
     def _info(self, tag, line):
-        if tag == T_WB or tag == T_DD:
+        if tag == _T_WB or tag == _T_DD:
             self._status = w.parse_status(line)
             return self._status is not None
-        if tag == T_IX:
+        if tag == _T_IX:
             try:
                 self._ix = w.parse_sbdix(line)
             except DecodeError:
@@ -243,14 +243,14 @@ class IridiumDriver(AtDriver):
         return False
 
     def _prompt(self, now, tag):
-        if tag != T_WB:
+        if tag != _T_WB:
             self.stats["unexpected"] += 1
             return
         s = self.slot
         self.at.write(w.sbdwb_data(self.mo_prefix + s.buf[: s.n]), now, self.wb_timeout_ms)
 
     def _block(self, now, tag, buf, n):
-        if tag != T_RB:
+        if tag != _T_RB:
             self.stats["unexpected"] += 1
         elif n and not w.block_ok(buf, n):
             self.stats["mt_bad"] += 1
@@ -261,16 +261,16 @@ class IridiumDriver(AtDriver):
                 self._events.append((_EV_RX, None, None, bytes(buf[:n])))
 
     def _result(self, now, tag, code, line):
-        if tag == T_WB:
+        if tag == _T_WB:
             self._written(now, code, line)
-        elif tag == T_IX:
+        elif tag == _T_IX:
             self._in_session = False
             if code == R_OK and self._ix is not None:
                 self._session_done(now, self._ix, None)
             else:
                 why = "no reply" if code == R_TIMEOUT else (line.decode() if code != R_OK else "no +SBDIX report")
                 self._session_done(now, None, "SBDIX: " + why)
-        elif tag == T_RB:
+        elif tag == _T_RB:
             if code == R_OK and self._rb_good:
                 self._mt_unread = False
             else:
@@ -278,7 +278,7 @@ class IridiumDriver(AtDriver):
                 if self._rb_fails >= self.rb_tries:
                     self.stats["mt_lost"] += 1
                     self._mt_unread = False
-        elif tag == T_DD:
+        elif tag == _T_DD:
             if code == R_OK and self._status == 0:
                 self._mo_loaded = False
                 self._dd_fails = 0
@@ -293,11 +293,11 @@ class IridiumDriver(AtDriver):
 
     def _written(self, now, code, line):
         s = self.slot
-        if s.state != WRITING:
+        if s.state != _WRITING:
             return
         st = self._status
         if code == R_OK and st == 0:
-            s.state = LOADED
+            s.state = _LOADED
             self._mo_loaded = True
             self._next_at = now
             return
@@ -326,7 +326,7 @@ class IridiumDriver(AtDriver):
 
     def _session_done(self, now, r, why):
         s = self.slot
-        mo_session = s.state == SESSION
+        mo_session = s.state == _SESSION
         if r is not None:
             self.last_session = r
             if r[2] == 1:
@@ -356,7 +356,7 @@ class IridiumDriver(AtDriver):
         if ticks_diff(now, self._first_at) >= self.give_up_ms:
             self._fail("%s (gave up after %d sessions)" % (why, self._sessions))
             return
-        s.state = LOADED
+        s.state = _LOADED
         self._wait = self._backoff(self._wait)
         self._next_at = ticks_add(now, self._wait)
 
@@ -383,7 +383,7 @@ class IridiumDriver(AtDriver):
         # the MO message is written again once it is back (its give-up
         # time still runs).
         s = self.slot
-        if s.state == WRITING or s.state == LOADED or s.state == SESSION:
+        if s.state == _WRITING or s.state == _LOADED or s.state == _SESSION:
             s.state = QUEUED
             self._mo_loaded = True
         self._in_session = False

@@ -23,6 +23,34 @@ from . import seatrac_wire as w
 from .seatrac_sequences import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot, SeatracConfig
 from .base import S_CONFIG, S_UP, AcousticDriver
 
+# seatrac_codes' numbers, as private constants (inlined: no RAM on a board)
+_BEACON_ALL = const(0)
+_CID_DAT_ERROR = const(0x63)
+_CID_DAT_QUEUE_CLR = const(0x65)
+_CID_DAT_QUEUE_SET = const(0x64)
+_CID_DAT_RECEIVE = const(0x61)
+_CID_DAT_SEND = const(0x60)
+_CID_PING_ERROR = const(0x43)
+_CID_PING_REQ = const(0x41)
+_CID_PING_RESP = const(0x42)
+_CID_PING_SEND = const(0x40)
+_CID_SETTINGS_GET = const(0x15)
+_CID_SETTINGS_SAVE = const(0x18)
+_CID_SETTINGS_SET = const(0x16)
+_CID_STATUS = const(0x10)
+_CID_SYS_ALIVE = const(0x01)
+_CID_SYS_INFO = const(0x02)
+_CID_SYS_REBOOT = const(0x03)
+_CST_FAIL = const(0x01)
+_CST_OK = const(0x00)
+_FIX_RANGE = const(0x01)
+_JUNK_TEXT = const(1)
+_MAX_MSG = const(128)
+_MSG_OWAY = const(0)
+_MSG_REQU = const(4)
+_SYNC_CMD = const(0x23)
+_SYNC_RSP = const(0x24)
+
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
 _EV_REPLIED = const(8)
@@ -31,14 +59,14 @@ _EV_RX = const(1)
 
 # answers to commands (ours, late, or someone else's on the line)
 _COMMANDS = (
-    w.CID_SYS_REBOOT,
-    w.CID_SETTINGS_GET,
-    w.CID_SETTINGS_SET,
-    w.CID_SETTINGS_SAVE,
-    w.CID_DAT_SEND,
-    w.CID_PING_SEND,
-    w.CID_DAT_QUEUE_SET,
-    w.CID_DAT_QUEUE_CLR,
+    _CID_SYS_REBOOT,
+    _CID_SETTINGS_GET,
+    _CID_SETTINGS_SET,
+    _CID_SETTINGS_SAVE,
+    _CID_DAT_SEND,
+    _CID_PING_SEND,
+    _CID_DAT_QUEUE_SET,
+    _CID_DAT_QUEUE_CLR,
 )
 
 
@@ -53,9 +81,9 @@ class SeatracDriver(AcousticDriver):
         self,
         beacon_id=None,
         mtu=30,
-        ack_type=w.MSG_REQU,
-        oway_type=w.MSG_OWAY,
-        ping_type=w.MSG_REQU,
+        ack_type=_MSG_REQU,
+        oway_type=_MSG_OWAY,
+        ping_type=_MSG_REQU,
         set_beacon_id=True,
         settings_len=110,
         id_offset=96,
@@ -104,7 +132,7 @@ class SeatracDriver(AcousticDriver):
             latency_ms=2 * packet_ms + turnaround_ms + byte_ms * mtu,
             flags=CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING,
         )
-        self.broadcast_addr = w.BEACON_ALL
+        self.broadcast_addr = _BEACON_ALL
         self.config = SeatracConfig(self, beacon_id, set_beacon_id, settings_len, id_offset, retry_ms, reboot_wait_ms)
         self.last_fix = None  # the latest ACO_FIX with a range, as a dict
         # the reply packet: what the host wants queued (dest, data or None),
@@ -123,9 +151,9 @@ class SeatracDriver(AcousticDriver):
             "statuses": 0,
             "queue_refused": 0,
         }
-        self._reader = w.LineReader(w.SYNC_RSP, self)
-        self._msg = bytearray(w.MAX_MSG)
-        self._line = bytearray(2 * w.MAX_MSG + 8)
+        self._reader = w.LineReader(_SYNC_RSP, self)
+        self._msg = bytearray(_MAX_MSG)
+        self._line = bytearray(2 * _MAX_MSG + 8)
         self._up_s = None  # beacon uptime (s) at self._up_at
         self._up_at = 0
         self.slot = AcousticSlot(self)
@@ -156,7 +184,7 @@ class SeatracDriver(AcousticDriver):
             raise EncodeError("%d bytes exceed the SeaTrac MTU of %d" % (n, self.mtu))
         if not isinstance(addr, int) or not 0 <= addr <= 15:
             raise EncodeError("SeaTrac beacon id %r outside 0..15" % (addr,))
-        if addr == w.BEACON_ALL:
+        if addr == _BEACON_ALL:
             mtype = self.oway_type  # broadcasts are one-way only
         else:
             mtype = self.ack_type if ack else self.oway_type
@@ -170,7 +198,7 @@ class SeatracDriver(AcousticDriver):
             return self._refuse("SeaTrac not ready")
         return self._accept(now, K_PING, addr, self.ping_type, b"")
 
-    def queue_reply(self, now, data, dest=w.BEACON_ALL):
+    def queue_reply(self, now, data, dest=_BEACON_ALL):
         # The packet for the beacon's next automatic reply to a DAT request
         # from dest (0: from anyone); None clears it. Written ahead of the
         # link's next frame: it must be in the beacon before someone asks.
@@ -193,7 +221,7 @@ class SeatracDriver(AcousticDriver):
     def command(self, now, cid, n):
         # Writes self._msg[:n] (CID already at [0]) and occupies the slot.
         self._msg[0] = cid
-        k = w.encode_into(self._line, w.SYNC_CMD, self._msg, n)
+        k = w.encode_into(self._line, _SYNC_CMD, self._msg, n)
         self._out.extend(memoryview(self._line)[:k])
         self._await(now, cid, self.cmd_timeout_ms)
 
@@ -204,24 +232,24 @@ class SeatracDriver(AcousticDriver):
             self._q_dirty = False
             self._q_sent = q = self._q_want
             if q[1] is None:
-                self.command(now, w.CID_DAT_QUEUE_CLR, 1)
+                self.command(now, _CID_DAT_QUEUE_CLR, 1)
             else:
                 m = self._msg
                 m[1] = q[0]
                 m[2] = len(q[1])
                 m[3 : 3 + len(q[1])] = q[1]
-                self.command(now, w.CID_DAT_QUEUE_SET, 3 + len(q[1]))
+                self.command(now, _CID_DAT_QUEUE_SET, 3 + len(q[1]))
             return
         if self.slot.state == QUEUED and not self._held(now):
             cid, n = self.slot.build(self._msg)
             self.command(now, cid, n)
             return
         if self._probe_due(now):
-            self.command(now, w.CID_SYS_ALIVE, 1)
+            self.command(now, _CID_SYS_ALIVE, 1)
 
     def _unanswered(self, now, cid):
         # the command cid timed out
-        if cid == w.CID_DAT_QUEUE_SET or cid == w.CID_DAT_QUEUE_CLR:
+        if cid == _CID_DAT_QUEUE_SET or cid == _CID_DAT_QUEUE_CLR:
             self._q_dirty = True  # write it again once the beacon answers
         if self._state == S_CONFIG:
             self.config.failed(now, "no response to command 0x%02X" % cid)
@@ -266,7 +294,7 @@ class SeatracDriver(AcousticDriver):
     def on_junk(self, kind):
         # Text outside messages is what a rebooting beacon prints: ask it
         # how long it has been up. Damaged lines are only counted.
-        if kind == w.JUNK_TEXT and self._state == S_UP:
+        if kind == _JUNK_TEXT and self._state == S_UP:
             self._probe = True
 
     def on_message(self, b, n):
@@ -277,27 +305,27 @@ class SeatracDriver(AcousticDriver):
             self._cmd = 0
             if self._state == S_CONFIG:
                 self.config.response(now, b, n)
-            elif cid == w.CID_DAT_SEND or cid == w.CID_PING_SEND:
+            elif cid == _CID_DAT_SEND or cid == _CID_PING_SEND:
                 if self.slot.state == CMD and n >= 2:
                     hold = self.slot.command_status(now, b[1])
                     if hold is not None:
                         self._hold_until = hold
                 else:
                     self.stats["stale"] += 1
-            elif cid == w.CID_SYS_ALIVE and n >= 5:
+            elif cid == _CID_SYS_ALIVE and n >= 5:
                 self.uptime(now, w.u32(b, 1))
-            elif cid == w.CID_DAT_QUEUE_SET or cid == w.CID_DAT_QUEUE_CLR:
-                st = b[1] if n >= 2 else w.CST_FAIL  # a trailing DEST_ID is tolerated
-                if st == w.CST_OK:
+            elif cid == _CID_DAT_QUEUE_SET or cid == _CID_DAT_QUEUE_CLR:
+                st = b[1] if n >= 2 else _CST_FAIL  # a trailing DEST_ID is tolerated
+                if st == _CST_OK:
                     self.queued_reply = self._q_sent[1]
                 else:
                     self.stats["queue_refused"] += 1
                     self.queue_problem = w.status_name(st)
             return
-        if cid == w.CID_DAT_RECEIVE:
+        if cid == _CID_DAT_RECEIVE:
             self._dat_receive(now, b, n)
-        elif cid == w.CID_DAT_ERROR or cid == w.CID_PING_ERROR:
-            kind = K_DAT if cid == w.CID_DAT_ERROR else K_PING
+        elif cid == _CID_DAT_ERROR or cid == _CID_PING_ERROR:
+            kind = K_DAT if cid == _CID_DAT_ERROR else K_PING
             if n >= 3 and self.slot.awaiting(kind, b[2]):
                 if kind == K_PING:
                     self.slot.ranged(None, None, {"status": w.status_name(b[1])})
@@ -305,15 +333,15 @@ class SeatracDriver(AcousticDriver):
                     self.slot.dat_error(b[1])
             else:
                 self.stats["stale"] += 1
-        elif cid == w.CID_PING_RESP:
+        elif cid == _CID_PING_RESP:
             self._ping_resp(b, n)
-        elif cid == w.CID_PING_REQ:
+        elif cid == _CID_PING_REQ:
             self._answering(now)
-        elif cid == w.CID_SYS_ALIVE or cid == w.CID_SYS_INFO:
+        elif cid == _CID_SYS_ALIVE or cid == _CID_SYS_INFO:
             # unsolicited: some firmware announces itself after a restart
             if n >= 5:
                 self.uptime(now, w.u32(b, 1))
-        elif cid == w.CID_STATUS:
+        elif cid == _CID_STATUS:
             self.stats["statuses"] += 1
             if n >= 10:
                 # TIMESTAMP: u64 ms since power-up (high word * 2**32 / 1000
@@ -346,7 +374,7 @@ class SeatracDriver(AcousticDriver):
         own = self.config.own_id
         if ack:
             if self.slot.awaiting(K_DAT, src) and (own is None or dest == own):
-                if b[3] & w.FIX_RANGE:
+                if b[3] & _FIX_RANGE:
                     self.last_fix = w.fix_dict(b, 1)
                 self.slot.delivered()
             else:
@@ -360,7 +388,7 @@ class SeatracDriver(AcousticDriver):
         if not ack and b[4] in REQ_TYPES and own is not None and dest == own:
             self._answering(now)
             q = self._q_want
-            if q is not None and q[0] in (w.BEACON_ALL, src) and self.queued_reply is not None:
+            if q is not None and q[0] in (_BEACON_ALL, src) and self.queued_reply is not None:
                 # the beacon's reply took the packet
                 self._q_want = self.queued_reply = None
                 self._events.append((_EV_REPLIED,))

@@ -32,6 +32,24 @@ from ..compat import const, ticks_add, ticks_diff
 from . import seatrac_wire as w
 from .base import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
+# seatrac_codes' numbers, as private constants (inlined: no RAM on a board)
+_CID_DAT_SEND = const(0x60)
+_CID_PING_SEND = const(0x40)
+_CID_SETTINGS_GET = const(0x15)
+_CID_SETTINGS_SAVE = const(0x18)
+_CID_SETTINGS_SET = const(0x16)
+_CID_SYS_INFO = const(0x02)
+_CID_SYS_REBOOT = const(0x03)
+_CST_OK = const(0x00)
+_CST_XCVR_BUSY = const(0x30)
+_MAX_MSG = const(128)
+_MSG_REQ = const(2)
+_MSG_REQU = const(4)
+_MSG_REQX = const(6)
+_PART_X110 = const(843)
+_PART_X150 = const(795)
+_REBOOT_CHECK = const(0x6A95)
+
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
 _EV_DELIVERED = const(3)
@@ -44,7 +62,7 @@ class SeatracConfig(ConfigSequence):
     """The beacon's configuration: info, settings, and the beacon id written when it differs."""
 
     def __init__(self, driver, beacon_id, set_beacon_id, settings_len, id_offset, retry_ms, reboot_wait_ms):
-        if settings_len + 1 > w.MAX_MSG or not 0 <= id_offset < settings_len:
+        if settings_len + 1 > _MAX_MSG or not 0 <= id_offset < settings_len:
             raise ValueError("settings_len / id_offset do not fit a SeaTrac message")
         ConfigSequence.__init__(self, driver, retry_ms)
         self.want_id = beacon_id
@@ -57,54 +75,54 @@ class SeatracConfig(ConfigSequence):
         self.id_writes = 0
         self.settings = bytearray(settings_len)
         self.info = {}
-        self._next = w.CID_SYS_INFO
+        self._next = _CID_SYS_INFO
         self._rebooting = False
 
     def first(self):
-        self._next = w.CID_SYS_INFO
+        self._next = _CID_SYS_INFO
 
     def step(self, now):
         cid = self._next
         m = self.d._msg
         n = 1
-        if cid == w.CID_SETTINGS_SET:
+        if cid == _CID_SETTINGS_SET:
             m[1 : 1 + self.settings_len] = self.settings
             n += self.settings_len
-        elif cid == w.CID_SYS_REBOOT:
-            m[1] = w.REBOOT_CHECK & 0xFF
-            m[2] = w.REBOOT_CHECK >> 8
+        elif cid == _CID_SYS_REBOOT:
+            m[1] = _REBOOT_CHECK & 0xFF
+            m[2] = _REBOOT_CHECK >> 8
             n = 3
         self.d.command(now, cid, n)
 
     def response(self, now, b, n):
         cid = b[0]
-        if cid == w.CID_SYS_INFO:
+        if cid == _CID_SYS_INFO:
             if n < 39:
                 self.failed(now, "short SYS_INFO")
                 return
             self._info(b)
             self.d.uptime(now, w.u32(b, 1), self._rebooting)
             self._rebooting = False
-            self._next = w.CID_SETTINGS_GET
-        elif cid == w.CID_SETTINGS_GET:
+            self._next = _CID_SETTINGS_GET
+        elif cid == _CID_SETTINGS_GET:
             self._settings(now, b, n)
-        elif cid == w.CID_SETTINGS_SET or cid == w.CID_SETTINGS_SAVE or cid == w.CID_SYS_REBOOT:
-            if n < 2 or b[1] != w.CST_OK:
+        elif cid == _CID_SETTINGS_SET or cid == _CID_SETTINGS_SAVE or cid == _CID_SYS_REBOOT:
+            if n < 2 or b[1] != _CST_OK:
                 name = "SYS_REBOOT"
-                if cid != w.CID_SYS_REBOOT:
-                    name = "SETTINGS_SET" if cid == w.CID_SETTINGS_SET else "SETTINGS_SAVE"
+                if cid != _CID_SYS_REBOOT:
+                    name = "SETTINGS_SET" if cid == _CID_SETTINGS_SET else "SETTINGS_SAVE"
                 self.failed(now, "%s refused: %s" % (name, w.status_name(b[1]) if n >= 2 else "no status"))
                 return
-            if cid == w.CID_SETTINGS_SET:
-                self._next = w.CID_SETTINGS_SAVE
-            elif cid == w.CID_SETTINGS_SAVE:
-                self._next = w.CID_SYS_REBOOT
+            if cid == _CID_SETTINGS_SET:
+                self._next = _CID_SETTINGS_SAVE
+            elif cid == _CID_SETTINGS_SAVE:
+                self._next = _CID_SYS_REBOOT
             else:
                 # the beacon closes its port, restarts and prints its
                 # power-up text: ask again only after a while
                 self._rebooting = True
                 self.d.forget_uptime()
-                self._next = w.CID_SYS_INFO
+                self._next = _CID_SYS_INFO
                 self._wait = ticks_add(now, self.reboot_wait_ms)
         else:
             self.failed(now, "unexpected answer 0x%02X" % cid)
@@ -120,9 +138,9 @@ class SeatracConfig(ConfigSequence):
             "firmware": "%d.%d.%d" % (b[31], b[32], w.u16(b, 33)),
         }
         caps = self.d.caps
-        if part == w.PART_X150:
+        if part == _PART_X150:
             caps.model = "X150"
-        elif part == w.PART_X110:
+        elif part == _PART_X110:
             caps.model = "X110"
         else:
             caps.model = "SeaTrac part %d" % part
@@ -149,7 +167,7 @@ class SeatracConfig(ConfigSequence):
         if self.set_beacon_id and self.id_writes < self.max_id_writes:
             self.id_writes += 1
             s[off] = want
-            self._next = w.CID_SETTINGS_SET
+            self._next = _CID_SETTINGS_SET
             return
         self.failed(now, "beacon id is %d, not %d" % (have, want))
 
@@ -178,7 +196,7 @@ AIR = const(3)
 K_DAT = const(0)
 K_PING = const(1)
 
-REQ_TYPES = (w.MSG_REQ, w.MSG_REQU, w.MSG_REQX)
+REQ_TYPES = (_MSG_REQ, _MSG_REQU, _MSG_REQX)
 
 
 class AcousticSlot(SlotBase):
@@ -198,11 +216,11 @@ class AcousticSlot(SlotBase):
         msg[2] = self.mtype
         self.state = CMD
         if self.kind == K_PING:
-            return w.CID_PING_SEND, 3
+            return _CID_PING_SEND, 3
         n = self.n
         msg[3] = n
         msg[4 : 4 + n] = memoryview(self.buf)[:n]
-        return w.CID_DAT_SEND, 4 + n
+        return _CID_DAT_SEND, 4 + n
 
     def busy_ms(self):
         # how long the beacon may stay busy with this transaction
@@ -215,9 +233,9 @@ class AcousticSlot(SlotBase):
     def command_status(self, now, status):
         # The beacon's answer to our command. Returns the time before which
         # no new acoustic command should be written, or None.
-        if status != w.CST_OK:
+        if status != _CST_OK:
             self.fail(w.status_name(status))
-            if status == w.CST_XCVR_BUSY:
+            if status == _CST_XCVR_BUSY:
                 return ticks_add(now, self.d.busy_backoff_ms)
             return None
         d = self.d

@@ -14,47 +14,19 @@ from ..codec.crc import crc16
 from ..errors import EncodeError
 from .base import SyncLines
 
-SYNC_CMD = const(0x23)  # '#'
-SYNC_RSP = const(0x24)  # '$'
-
-# Command identifiers (the response to a command carries the same CID).
-CID_SYS_ALIVE = const(0x01)
-CID_SYS_INFO = const(0x02)
-CID_SYS_REBOOT = const(0x03)
-CID_STATUS = const(0x10)
-CID_SETTINGS_GET = const(0x15)
-CID_SETTINGS_SET = const(0x16)
-CID_SETTINGS_LOAD = const(0x17)
-CID_SETTINGS_SAVE = const(0x18)
-CID_SETTINGS_RESET = const(0x19)
-CID_XCVR_STATUS = const(0x3A)
-CID_PING_SEND = const(0x40)
-CID_PING_REQ = const(0x41)
-CID_PING_RESP = const(0x42)
-CID_PING_ERROR = const(0x43)
-CID_DAT_SEND = const(0x60)
-CID_DAT_RECEIVE = const(0x61)
-CID_DAT_ERROR = const(0x63)
-CID_DAT_QUEUE_SET = const(0x64)  # a packet for the automatic reply to the next DAT request
-CID_DAT_QUEUE_CLR = const(0x65)
-CID_DAT_QUEUE_STATUS = const(0x66)
-
-REBOOT_CHECK = const(0x6A95)  # SYS_REBOOT's guard word
-
-# CST_E status codes.
-CST_OK = const(0x00)
-CST_FAIL = const(0x01)
-CST_CMD_PARAM_MISSING = const(0x04)
-CST_CMD_PARAM_INVALID = const(0x05)
-CST_XCVR_BUSY = const(0x30)
-CST_XCVR_RESP_TIMEOUT = const(0x34)
-CST_XCVR_RESP_ERROR = const(0x35)
-CST_XCVR_RESP_WRONG = const(0x36)
-CST_XCVR_STATE_IDLE = const(0x3B)
-CST_XCVR_STATE_TX = const(0x3C)
-CST_XCVR_STATE_REQ = const(0x3D)
-CST_XCVR_STATE_RX = const(0x3E)
-CST_XCVR_STATE_RESP = const(0x3F)
+# seatrac_codes' numbers this module uses, as private constants (inlined:
+# no RAM on a board)
+_FIX_BASE = const(16)
+_FIX_POSITION = const(0x04)
+_FIX_RANGE = const(0x01)
+_FIX_USBL = const(0x02)
+_JUNK_CRC = const(5)
+_JUNK_HEX = const(4)
+_JUNK_OVERLONG = const(3)
+_JUNK_SHORT = const(6)
+_JUNK_TEXT = const(1)
+_JUNK_TRUNCATED = const(2)
+_MAX_MSG = const(128)
 
 # "CODE NAME" pairs in one constant string: one object on a board's heap when
 # the modules run from a ROMFS image, where a tuple of pairs took 19 tuples
@@ -76,34 +48,6 @@ def status_name(code):
         if words[i] == key:
             return words[i + 1]
     return "CST_0x%02X" % code
-
-
-# AMSGTYPE_E: acoustic message types.
-MSG_OWAY = const(0)
-MSG_OWAYU = const(1)
-MSG_REQ = const(2)
-MSG_RESP = const(3)
-MSG_REQU = const(4)
-MSG_RESPU = const(5)
-MSG_REQX = const(6)
-MSG_RESPX = const(7)
-
-BEACON_ALL = const(0)  # destination 0: every beacon (one-way types only)
-
-# ACO_FIX flags.
-FIX_RANGE = const(0x01)
-FIX_USBL = const(0x02)
-FIX_POSITION = const(0x04)
-
-FIX_BASE = const(16)  # dest, src, flags, type, yaw, pitch, roll, depth, vos, rssi
-
-# Hardware part numbers reported by SYS_INFO.
-PART_X150 = const(795)
-PART_X110 = const(843)
-
-# Largest binary message (CID + payload + CRC) either end accepts: a 110-byte
-# settings record is the longest message the driver deals with.
-MAX_MSG = const(128)
 
 _HEX = b"0123456789ABCDEF"
 
@@ -147,42 +91,24 @@ def encode_into(out, sync, msg, n):
     return j + 2
 
 
-def encode(sync, cid, payload=b""):
-    # Convenience for tests and the emulator: one line as bytes.
-    msg = bytearray(1 + len(payload))
-    msg[0] = cid
-    msg[1:] = payload
-    out = bytearray(2 * len(msg) + 7)
-    return bytes(memoryview(out)[: encode_into(out, sync, msg, len(msg))])
-
-
-# Kinds of damaged input a LineReader reports to its sink's on_junk().
-JUNK_TEXT = const(1)  # a line without the sync character (noise, boot text)
-JUNK_TRUNCATED = const(2)  # a new sync arrived before the line ended
-JUNK_OVERLONG = const(3)
-JUNK_HEX = const(4)  # odd length, non-hex or lowercase characters
-JUNK_CRC = const(5)
-JUNK_SHORT = const(6)  # fewer than CID + CRC
-
-
 class LineReader(SyncLines):
     # Cuts the byte stream into messages that start with `sync` (the
     # framing is base.SyncLines). Accepts CR, LF or both as the end of a line.
     # Good messages go to sink.on_message(buf, n) with buf[0] the CID and n
     # counting CID + payload; everything else is dropped, counted and
     # reported to sink.on_junk(kind). Two preallocated buffers; no allocation per byte.
-    def __init__(self, sync, sink, max_msg=MAX_MSG):
-        SyncLines.__init__(self, sync, sink, 2 * max_msg, JUNK_TEXT, JUNK_TRUNCATED, JUNK_OVERLONG)
+    def __init__(self, sync, sink, max_msg=_MAX_MSG):
+        SyncLines.__init__(self, sync, sink, 2 * max_msg, _JUNK_TEXT, _JUNK_TRUNCATED, _JUNK_OVERLONG)
         self._msg = bytearray(max_msg)
         self.messages = 0
 
     def _end_line(self, n):
         self._n = 0
         if n & 1:
-            self._junk(JUNK_HEX)
+            self._junk(_JUNK_HEX)
             return
         if n < 6:
-            self._junk(JUNK_SHORT)
+            self._junk(_JUNK_SHORT)
             return
         line = self._line
         msg = self._msg
@@ -192,12 +118,12 @@ class LineReader(SyncLines):
             hi = hv[line[2 * i]]
             lo = hv[line[2 * i + 1]]
             if hi > 15 or lo > 15:
-                self._junk(JUNK_HEX)
+                self._junk(_JUNK_HEX)
                 return
             msg[i] = (hi << 4) | lo
         m -= 2
         if crc16(memoryview(msg)[:m]) != msg[m] | (msg[m + 1] << 8):
-            self._junk(JUNK_CRC)
+            self._junk(_JUNK_CRC)
             return
         self.messages += 1
         self._sink.on_message(msg, m)
@@ -225,17 +151,17 @@ def i32(b, o):
 def fix_len(b, o, end):
     # Length of the ACO_FIX starting at b[o], or -1 when it does not fit in
     # b[o:end] (a damaged or foreign message).
-    if end - o < FIX_BASE:
+    if end - o < _FIX_BASE:
         return -1
     flags = b[o + 2]
-    k = FIX_BASE
-    if flags & FIX_RANGE:
+    k = _FIX_BASE
+    if flags & _FIX_RANGE:
         k += 10
-    if flags & FIX_USBL:
+    if flags & _FIX_USBL:
         if o + k >= end:
             return -1
         k += 1 + 2 * b[o + k] + 6
-    if flags & FIX_POSITION:
+    if flags & _FIX_POSITION:
         k += 6
     return k if o + k <= end else -1
 
@@ -255,20 +181,20 @@ def fix_dict(b, o):
         "vos": u16(b, o + 12) / 10,
         "rssi": i16(b, o + 14) / 10,
     }
-    k = o + FIX_BASE
-    if flags & FIX_RANGE:
+    k = o + _FIX_BASE
+    if flags & _FIX_RANGE:
         d["range_count"] = u32(b, k)
         d["range_time"] = i32(b, k + 4) / 1e7
         d["range"] = u16(b, k + 8) / 10
         k += 10
-    if flags & FIX_USBL:
+    if flags & _FIX_USBL:
         ch = b[k]
         k += 1 + 2 * ch
         d["azimuth"] = i16(b, k) / 10
         d["elevation"] = i16(b, k + 2) / 10
         d["fit_error"] = i16(b, k + 4)  # units not documented: raw
         k += 6
-    if flags & FIX_POSITION:
+    if flags & _FIX_POSITION:
         d["easting"] = i16(b, k) / 10
         d["northing"] = i16(b, k + 2) / 10
         d["depth"] = i16(b, k + 4) / 10

@@ -45,7 +45,7 @@ F_AUTH = const(1)
 
 BROADCAST = const(255)  # API value; see the header comment for the encoding
 MAX_ADDR = const(254)  # node addresses are 0..254
-SHORT_MAX_ADDR = const(15)
+_SHORT_MAX_ADDR = const(15)
 
 SEQ_MOD_RAW = const(64)
 SEQ_MOD_ELIDED = const(16)
@@ -114,7 +114,7 @@ def _wire_dst(src, dst):
 
 def raw_overhead(src, dst):
     # Bytes a raw frame adds to its payload between these two nodes.
-    if src <= SHORT_MAX_ADDR and (dst <= SHORT_MAX_ADDR or dst == BROADCAST):
+    if src <= _SHORT_MAX_ADDR and (dst <= _SHORT_MAX_ADDR or dst == BROADCAST):
         return RAW_OVERHEAD_SHORT
     return RAW_OVERHEAD_WIDE
 
@@ -124,7 +124,7 @@ def encode_raw_into(buf, ftype, src, dst, seq, payload, flags=0):
     # Does not allocate when payload is a bytes-like object.
     _check_common(ftype, seq, flags, SEQ_MOD_RAW)
     wdst = _wire_dst(src, dst)
-    wide = src > SHORT_MAX_ADDR or wdst > SHORT_MAX_ADDR
+    wide = src > _SHORT_MAX_ADDR or wdst > _SHORT_MAX_ADDR
     hlen = 4 if wide else 3
     n = hlen + len(payload)
     if n + 2 > len(buf):
@@ -194,7 +194,7 @@ def decode_raw(data):
         src = data[3]
         if src > MAX_ADDR or wdst > MAX_ADDR:
             raise DecodeError("reserved address 255 in frame header")
-        if wdst <= SHORT_MAX_ADDR and src <= SHORT_MAX_ADDR:
+        if wdst <= _SHORT_MAX_ADDR and src <= _SHORT_MAX_ADDR:
             # the encoder always uses the short form for these; a wide one is
             # not ours (and would give two encodings for one frame)
             raise DecodeError("wide header for short addresses")

@@ -17,7 +17,7 @@ _AVAILABLE = const(1)
 _UNAVAILABLE = const(2)
 _UNKNOWN = const(0)
 
-ADVERT_LEN = const(2)
+_ADVERT_LEN = const(2)
 _PERIOD_UNIT_MS = const(4000)
 
 
@@ -31,8 +31,8 @@ def encode_advert(node_id, period_ms):
 
 
 def decode_advert(data):
-    if len(data) != ADVERT_LEN:
-        raise DecodeError("advert of %d bytes, expected %d" % (len(data), ADVERT_LEN))
+    if len(data) != _ADVERT_LEN:
+        raise DecodeError("advert of %d bytes, expected %d" % (len(data), _ADVERT_LEN))
     if data[0] > 254:
         raise DecodeError("advert from reserved node id 255")
     if data[1] == 0:

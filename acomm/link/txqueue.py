@@ -89,7 +89,7 @@ PRIO_MULTIMEDIA = const(16)
 PRIO_LOWEST = const(16)
 
 MAX_LIFESPAN_MS = const(1 << 28)
-MAX_AGING_MS = const(1 << 23)  # 2.3 h: aging over 16 classes stays < 2**27 ms
+_MAX_AGING_MS = const(1 << 23)  # 2.3 h: aging over 16 classes stays < 2**27 ms
 
 _NCLASS = const(16)
 _MASK = const((1 << 30) - 1)  # compat.TICKS_MAX
@@ -200,7 +200,7 @@ class TxQueue:
     def __init__(self, capacity, aging_ms=0):
         if capacity < 1:
             raise ValueError("capacity must be >= 1")
-        if not 0 <= aging_ms <= MAX_AGING_MS:
+        if not 0 <= aging_ms <= _MAX_AGING_MS:
             raise ValueError("aging_ms must be 0..2**23")
         self.capacity = capacity
         self._aging = aging_ms

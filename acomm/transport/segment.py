@@ -41,7 +41,7 @@ FRAG_HEADER = const(1)
 MAX_INDEX = const(4095)
 MAX_BITMAP = const(8)  # 64 fragments after the base per SACK
 MAX_LENGTH = const((1 << 21) - 1)
-MAX_LIFE_S = const(65535)
+_MAX_LIFE_S = const(65535)
 
 _K_SACK = const(8)
 _P = const(4)
@@ -49,7 +49,7 @@ _C = const(4)
 _T = const(2)
 _G = const(1)
 
-F_RELAY = const(0x80)
+_F_RELAY = const(0x80)
 F_COMPRESSED = const(0x40)
 
 # refusal reasons
@@ -150,7 +150,7 @@ def packet_header(pid, length, compressed=False, relay=None):
         raise EncodeError("packet id %r outside 0..65535" % (pid,))
     if not 0 <= length <= MAX_LENGTH:
         raise EncodeError("packet of %d bytes, at most %d" % (length, MAX_LENGTH))
-    out = bytearray(((F_RELAY if relay is not None else 0) | (F_COMPRESSED if compressed else 0), pid >> 8, pid & 0xFF))
+    out = bytearray(((_F_RELAY if relay is not None else 0) | (F_COMPRESSED if compressed else 0), pid >> 8, pid & 0xFF))
     while True:
         b = length & 0x7F
         length >>= 7
@@ -163,7 +163,7 @@ def packet_header(pid, length, compressed=False, relay=None):
         origin, final, prio, life = relay
         if not (0 <= origin <= 254 and 0 <= final <= 254 and 1 <= prio <= 16):
             raise EncodeError("relay fields out of range: %r" % (relay,))
-        life = 0 if life < 0 else (MAX_LIFE_S if life > MAX_LIFE_S else int(life))
+        life = 0 if life < 0 else (_MAX_LIFE_S if life > _MAX_LIFE_S else int(life))
         out.extend((origin, final, prio, life >> 8, life & 0xFF))
     return bytes(out)
 
@@ -197,7 +197,7 @@ def decode_packet_header(data):
             break
     h.length = length
     h.relay = None
-    if f & F_RELAY:
+    if f & _F_RELAY:
         if i + 5 > n:
             raise DecodeError("relay fields cut short")
         prio = data[i + 2]

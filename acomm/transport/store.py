@@ -63,9 +63,9 @@ from ..codec.crc32 import crc32
 from ..errors import EncodeError, StoreError, StoreFull
 
 MAGIC = b"ACS\x01"  # "acomm store", format 1
-PUT = const(0x50)  # 'P'
-DEL = const(0x44)  # 'D'
-MAX_DATA = const(0xFFFF)
+_PUT = const(0x50)  # 'P'
+_DEL = const(0x44)  # 'D'
+_MAX_DATA = const(0xFFFF)
 _SYNC = const(0xA5)
 _SYNC_B = b"\xa5"
 _HDR = const(8)  # sync, kind, key u32, length u16
@@ -108,7 +108,7 @@ def _sync_dir(path):
 
 class Store:
     def __init__(self, path, capacity_bytes=65536, max_record=1024, sync=True):
-        if not 0 < max_record <= MAX_DATA:
+        if not 0 < max_record <= _MAX_DATA:
             raise StoreError("max_record must be 1..65535")
         if capacity_bytes < len(MAGIC) + _OVER:
             raise StoreError("capacity_bytes too small")
@@ -151,7 +151,7 @@ class Store:
                 self.compact()
             if self.used_bytes + need > self.capacity_bytes:
                 raise StoreFull("store full")
-        hdr = struct.pack("<BBIH", _SYNC, PUT, key, n)
+        hdr = struct.pack("<BBIH", _SYNC, _PUT, key, n)
         off = self.used_bytes
         self._append_record(hdr, data, crc32(data, crc32(hdr)))
         j = self._find(key)
@@ -174,7 +174,7 @@ class Store:
             self._drop(j)
             self.compact()
         else:
-            hdr = struct.pack("<BBIH", _SYNC, DEL, key, 0)
+            hdr = struct.pack("<BBIH", _SYNC, _DEL, key, 0)
             self._append_record(hdr, b"", crc32(hdr))
             self._drop(j)
             self.dead_bytes += _OVER
@@ -194,7 +194,7 @@ class Store:
         # The file may have rotted since it was opened: check again.
         if (
             len(tail) != 4
-            or hdr != struct.pack("<BBIH", _SYNC, PUT, key, n)
+            or hdr != struct.pack("<BBIH", _SYNC, _PUT, key, n)
             or struct.unpack("<I", tail)[0] != crc32(data, crc32(hdr))
         ):
             self._drop(j)
@@ -231,7 +231,7 @@ class Store:
                 # verify before copying so a record that rotted is left out
                 # instead of being carried into the new file
                 r = self._parse(off, self.used_bytes)
-                if r is None or r[0] != PUT or r[2] != n or ks[4 * j : 4 * j + 4] != struct.pack("<I", r[1]):
+                if r is None or r[0] != _PUT or r[2] != n or ks[4 * j : 4 * j + 4] != struct.pack("<I", r[1]):
                     self.stats["corrupt_dropped"] += 1
                     continue
                 self._copy(off, _OVER + n, g)
@@ -354,7 +354,7 @@ class Store:
         if f.readinto(mv[:_HDR]) != _HDR:
             return None
         sync, kind, key, n = struct.unpack_from("<BBIH", buf, 0)
-        if sync != _SYNC or not (kind == PUT or (kind == DEL and n == 0)) or p + _OVER + n > size:
+        if sync != _SYNC or not (kind == _PUT or (kind == _DEL and n == 0)) or p + _OVER + n > size:
             return None
         crc = crc32(mv[:_HDR])
         left = n
@@ -416,7 +416,7 @@ class Store:
             j = self._find(key)
             if j >= 0:
                 self._drop(j)
-            if kind == PUT:
+            if kind == _PUT:
                 self._keys.extend(struct.pack("<I", key))
                 self._locs.extend(struct.pack("<IH", p, n))
                 self.live_bytes += _OVER + n

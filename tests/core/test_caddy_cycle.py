@@ -5,7 +5,7 @@
 # transmissions on the channel, the cycle time against the seed's formula,
 # a lost reply that costs one timeout and nothing more, and Buddy's longer
 # messages when it sees the diver.
-from acomm.drivers import seatrac_wire as w
+from acomm.drivers import seatrac_codes as sc
 from acomm_sim.caddy import CaddyCycle, budget_s
 from acomm_sim.channel import Channel
 from acomm_sim.seatrac_xcvr import PROTO_DAT
@@ -32,7 +32,7 @@ def world(pos=POS, **emu):
     for name, nid in (("buoy", P), ("auv", B), ("diver", D)):
         opts = dict(emu)
         if nid == D:
-            opts["part"] = w.PART_X110
+            opts["part"] = sc.PART_X110
         wd.add(name, nid, "seatrac", position=pos[nid], link_opts=lo, emu_opts=opts)
     assert wd.run(20000, until=lambda: all(sn.driver.ready(wd.now()) for sn in wd.nodes.values()))
     cyc = CaddyCycle(wd, pladypos="buoy", buddy="auv", diver="diver").start(wd.now())
@@ -55,7 +55,7 @@ def prop_s(pos):
 def test_eight_transmissions_in_order():
     wd, cyc = world()
     wd.run(30000)
-    air = [(a[1], a[2], a[3] in (w.MSG_REQU, w.MSG_REQ), a[4]) for a in wd.channel.air if a[2]]  # no adverts
+    air = [(a[1], a[2], a[3] in (sc.MSG_REQU, sc.MSG_REQ), a[4]) for a in wd.channel.air if a[2]]  # no adverts
     one = [
         (P, D, True, 0), (D, P, False, 3),  # AT1 + AT2: empty ping, DIVER_REPLY 21 bits
         (B, P, True, 4), (P, B, False, 8),  # AT3 + AT4: BUDDY_PING 25, PLADYPOS_REPLY 60
@@ -134,7 +134,7 @@ def test_replies_count_as_being_heard_so_adverts_do_not_cut_into_the_cycle():
     # (EV_REPLIED) as a transmission, so no advert goes while it cycles.
     wd = World(seed=3, channel=Recording(seed=3))
     for name, nid in (("buoy", P), ("auv", B), ("diver", D)):
-        opts = {"part": w.PART_X110} if nid == D else {}
+        opts = {"part": sc.PART_X110} if nid == D else {}
         wd.add(name, nid, "seatrac", position=POS[nid], link_opts={"advert_period_ms": 30000}, emu_opts=opts)
     assert wd.run(20000, until=lambda: all(sn.driver.ready(wd.now()) for sn in wd.nodes.values()))
     wd.run(40000)  # the first adverts go before the cycle starts

@@ -5,6 +5,7 @@
 from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.drivers import seatrac_wire as w
+from acomm.drivers import seatrac_codes as sc
 from acomm.drivers.seatrac import SeatracDriver
 from acomm.events import (
     DELIVERED,
@@ -44,15 +45,15 @@ DAT_ERROR = b"$633402671F\r\n"
 
 # -- byte-exact: the wire format ----------------------------------------------
 def test_wire_vectors():
-    assert w.encode(w.SYNC_CMD, w.CID_SYS_INFO) == b"#0281C1\r\n"
-    assert w.encode(w.SYNC_CMD, w.CID_SYS_ALIVE) == b"#01C1C0\r\n"
-    assert w.encode(w.SYNC_CMD, w.CID_STATUS, b"\x00") == b"#10000DC0\r\n"
-    assert w.encode(w.SYNC_CMD, w.CID_SETTINGS_GET) == b"#15C1CF\r\n"
-    assert w.encode(w.SYNC_CMD, w.CID_SYS_REBOOT, b"\x95\x6a") == b"#03956A1F7F\r\n"
-    assert w.encode(w.SYNC_CMD, w.CID_PING_SEND, b"\x02\x04") == PING_SEND
-    assert w.encode(w.SYNC_CMD, w.CID_DAT_SEND, b"\x02\x00\x05Hello") == DAT_SEND
-    assert w.encode(w.SYNC_RSP, w.CID_DAT_ERROR, b"\x34\x02") == DAT_ERROR
-    assert w.encode(w.SYNC_RSP, w.CID_PING_ERROR, b"\x34\x02") == PING_ERROR
+    assert sc.encode(sc.SYNC_CMD, sc.CID_SYS_INFO) == b"#0281C1\r\n"
+    assert sc.encode(sc.SYNC_CMD, sc.CID_SYS_ALIVE) == b"#01C1C0\r\n"
+    assert sc.encode(sc.SYNC_CMD, sc.CID_STATUS, b"\x00") == b"#10000DC0\r\n"
+    assert sc.encode(sc.SYNC_CMD, sc.CID_SETTINGS_GET) == b"#15C1CF\r\n"
+    assert sc.encode(sc.SYNC_CMD, sc.CID_SYS_REBOOT, b"\x95\x6a") == b"#03956A1F7F\r\n"
+    assert sc.encode(sc.SYNC_CMD, sc.CID_PING_SEND, b"\x02\x04") == PING_SEND
+    assert sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, b"\x02\x00\x05Hello") == DAT_SEND
+    assert sc.encode(sc.SYNC_RSP, sc.CID_DAT_ERROR, b"\x34\x02") == DAT_ERROR
+    assert sc.encode(sc.SYNC_RSP, sc.CID_PING_ERROR, b"\x34\x02") == PING_ERROR
 
 
 class Sink:
@@ -69,7 +70,7 @@ class Sink:
 
 def test_line_decoder_takes_every_terminator_and_drops_damage():
     s = Sink()
-    dec = w.LineReader(w.SYNC_RSP, s)
+    dec = w.LineReader(sc.SYNC_RSP, s)
     good = (PING_STATUS, DAT_ERROR.replace(b"\r\n", b"\n"), PING_ERROR.replace(b"\r\n", b"\r"), b"$4000028015\n\r")
     dec.feed(b"".join(good))
     assert s.msgs == [b"\x40\x00\x02", b"\x63\x34\x02", b"\x43\x34\x02", b"\x40\x00\x02"]
@@ -84,18 +85,18 @@ def test_line_decoder_takes_every_terminator_and_drops_damage():
         b"$C1\r\n",  # shorter than CID + CRC
     ]
     dec.feed(b"".join(bad))
-    kinds = [w.JUNK_TEXT, w.JUNK_CRC, w.JUNK_CRC, w.JUNK_HEX, w.JUNK_HEX, w.JUNK_TRUNCATED, w.JUNK_OVERLONG, w.JUNK_SHORT]
+    kinds = [sc.JUNK_TEXT, sc.JUNK_CRC, sc.JUNK_CRC, sc.JUNK_HEX, sc.JUNK_HEX, sc.JUNK_TRUNCATED, sc.JUNK_OVERLONG, sc.JUNK_SHORT]
     assert s.junk == kinds
     dec.feed(b"\r\n" + PING_STATUS)
     assert s.msgs[-1] == b"\x40\x00\x02" and len(s.msgs) == 5
-    assert dec.messages == 5 and dec.junk[w.JUNK_CRC] == 2
+    assert dec.messages == 5 and dec.junk[sc.JUNK_CRC] == 2
 
 
 # -- byte-exact: the driver ---------------------------------------------------
 def settings_line(beacon_id):
     from acomm_sim.seatrac import default_settings
 
-    return w.encode(w.SYNC_RSP, w.CID_SETTINGS_GET, default_settings(beacon_id))
+    return sc.encode(sc.SYNC_RSP, sc.CID_SETTINGS_GET, default_settings(beacon_id))
 
 
 def up_driver(beacon_id=1, **opts):
@@ -167,7 +168,7 @@ def test_driver_maps_refusals_and_acks():
     d = up_driver()
     h = d.send(10, 2, b"x", True)
     assert d.take_output() == b"#6002040178C1C3\r\n"
-    d.feed(20, w.encode(w.SYNC_RSP, w.CID_DAT_SEND, b"\x30\x02"))
+    d.feed(20, sc.encode(sc.SYNC_RSP, sc.CID_DAT_SEND, b"\x30\x02"))
     assert d.take_events() == [(EV_TX_FAILED, h, "XCVR_BUSY")]
     # busy: the next command waits for the back-off, the link is not blocked
     assert d.ready(20)
@@ -175,14 +176,14 @@ def test_driver_maps_refusals_and_acks():
     assert d.take_output() == b""
     d.poll(20 + 1000)
     assert d.take_output().startswith(b"#600204")
-    d.feed(1030, w.encode(w.SYNC_RSP, w.CID_DAT_SEND, b"\x00\x02"))
+    d.feed(1030, sc.encode(sc.SYNC_RSP, sc.CID_DAT_SEND, b"\x00\x02"))
     # the remote's automatic reply: DAT_RECEIVE with ACK_FLAG set, from 2 to 1
-    ack = bytes((1, 2, w.FIX_RANGE, w.MSG_RESPU)) + bytes(12) + bytes(8) + b"\xe8\x03" + b"\x01\x00"
-    d.feed(2500, w.encode(w.SYNC_RSP, w.CID_DAT_RECEIVE, ack))
+    ack = bytes((1, 2, sc.FIX_RANGE, sc.MSG_RESPU)) + bytes(12) + bytes(8) + b"\xe8\x03" + b"\x01\x00"
+    d.feed(2500, sc.encode(sc.SYNC_RSP, sc.CID_DAT_RECEIVE, ack))
     assert d.take_events() == [(EV_TX_DONE, h), (EV_DELIVERED, h)]
     assert d.last_fix["range"] == 100.0
     h = d.send(2600, 2, b"y", False)
-    d.feed(2610, w.encode(w.SYNC_RSP, w.CID_DAT_SEND, b"\x05\x02"))
+    d.feed(2610, sc.encode(sc.SYNC_RSP, sc.CID_DAT_SEND, b"\x05\x02"))
     d.take_output()
     assert d.take_events() == [(EV_TX_FAILED, h, "CMD_PARAM_INVALID")]
     # a broadcast always goes one-way, whatever was asked
@@ -222,7 +223,7 @@ def test_driver_detects_reboot_from_uptime():
     d.feed(20, DAT_STATUS)
     d.feed(600, b"SeaTrac power-up text\r\n")  # a restart prints text
     assert d.take_output() == b"#01C1C0\r\n"  # how long have you been up?
-    d.feed(610, w.encode(w.SYNC_RSP, w.CID_SYS_ALIVE, b"\x00\x00\x00\x00"))
+    d.feed(610, sc.encode(sc.SYNC_RSP, sc.CID_SYS_ALIVE, b"\x00\x00\x00\x00"))
     ev = d.take_events()
     assert ev == [(EV_DRIVER_DOWN, "modem rebooted"), (EV_TX_FAILED, h, "modem rebooted")]
     assert not d.ready(610)
@@ -234,17 +235,17 @@ def test_driver_detects_reboot_from_uptime():
     # noise that is not a restart: the probe finds the uptime has grown
     d.feed(5000, b"\x00\xff garbage\r\n")
     assert d.take_output() == b"#01C1C0\r\n"
-    d.feed(5010, w.encode(w.SYNC_RSP, w.CID_SYS_ALIVE, (57).to_bytes(4, "little")))
+    d.feed(5010, sc.encode(sc.SYNC_RSP, sc.CID_SYS_ALIVE, (57).to_bytes(4, "little")))
     assert d.take_events() == [] and d.ready(5010)
     # a beacon that announces itself with SYS_INFO after a restart
     info = bytes(int(SYS_INFO_EXAMPLE[i : i + 2], 16) for i in range(3, len(SYS_INFO_EXAMPLE) - 6, 2))
-    d.feed(9000, w.encode(w.SYNC_RSP, w.CID_SYS_INFO, b"\x01\x00\x00\x00" + info[4:]))  # up 1 s
+    d.feed(9000, sc.encode(sc.SYNC_RSP, sc.CID_SYS_INFO, b"\x01\x00\x00\x00" + info[4:]))  # up 1 s
     assert d.take_events() == [(EV_DRIVER_DOWN, "modem rebooted")] and not d.ready(9000)
     assert d.take_output() == b"#0281C1\r\n"
 
 
 # -- byte-exact: the emulator ---------------------------------------------------
-def emulator_pair(part=w.PART_X150, **opts):
+def emulator_pair(part=sc.PART_X150, **opts):
     m = Medium(default_distance=150.0)
     a = SeatracEmulator(m, 1, part=part, **opts)
     b = SeatracEmulator(m, 2, part=part, **opts)
@@ -268,13 +269,13 @@ def test_emulator_answers_like_the_reference():
     e.feed(0, b"#10000DC0\r\n")  # flags 0: the configured 0x07 come back
     assert e.take_output() == STATUS_EXAMPLE
     # the example exchanges of section 1.8 (beacon 1 asks beacon 2)
-    m, a, b = emulator_pair(part=w.PART_X110)
+    m, a, b = emulator_pair(part=sc.PART_X110)
     a.feed(0, DAT_SEND)
     assert a.take_output() == DAT_STATUS
     out_a, out_b = run_emulators((a, b), 0, 1990)
     assert out_a == b"" and out_b.startswith(b"$61020100")  # heard by 2
-    b.feed(2000, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, b"\x01\x00\x05Hello"))
-    assert b.take_output() == w.encode(w.SYNC_RSP, w.CID_DAT_SEND, b"\x00\x01")
+    b.feed(2000, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, b"\x01\x00\x05Hello"))
+    assert b.take_output() == sc.encode(sc.SYNC_RSP, sc.CID_DAT_SEND, b"\x00\x01")
     # the reference's DAT_RECEIVE bytes are what beacon 1 hears from 2
     assert run_emulators((a, b), 2000, 3990)[0] == DAT_RECEIVE
     a.feed(4000, PING_SEND)
@@ -284,13 +285,13 @@ def test_emulator_answers_like_the_reference():
     assert out_b.startswith(b"$4102010004D2")  # PING_REQ: information only
     # the reference's PING_RESP carries type RESP and a range only: the
     # reply to a MSG_REQ ping at an X110, 150 m away
-    a.feed(6000, w.encode(w.SYNC_CMD, w.CID_PING_SEND, bytes((2, w.MSG_REQ))))
+    a.feed(6000, sc.encode(sc.SYNC_CMD, sc.CID_PING_SEND, bytes((2, sc.MSG_REQ))))
     assert a.take_output() == PING_STATUS
     out_a, _ = run_emulators((a, b), 6000, 8000)
     assert out_a == PING_RESP
     # local flag (newer firmware)
-    m, a, b = emulator_pair(part=w.PART_X110, local_flag=True)
-    b.feed(0, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, b"\x01\x00\x05Hello"))
+    m, a, b = emulator_pair(part=sc.PART_X110, local_flag=True)
+    b.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, b"\x01\x00\x05Hello"))
     b.take_output()
     assert run_emulators((a, b), 0, 2000)[0] == DAT_RECEIVE_LOCAL
 
@@ -301,10 +302,10 @@ def test_emulator_times_out_and_refuses():
     a.feed(0, PING_SEND)  # nobody is beacon 2
     assert a.take_output() == PING_STATUS
     a.feed(10, DAT_SEND)
-    assert a.take_output() == w.encode(w.SYNC_RSP, w.CID_DAT_SEND, b"\x30\x02")  # busy with the ping
+    assert a.take_output() == sc.encode(sc.SYNC_RSP, sc.CID_DAT_SEND, b"\x30\x02")  # busy with the ping
     out = run_emulators((a,), 0, 5000)[0]
     assert out == PING_ERROR
-    a.feed(6000, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, b"\x02\x04\x05Hello"))
+    a.feed(6000, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, b"\x02\x04\x05Hello"))
     assert a.take_output() == DAT_STATUS
     assert run_emulators((a,), 6000, 11000)[0] == DAT_ERROR
     st = {}
@@ -314,18 +315,18 @@ def test_emulator_times_out_and_refuses():
         ("broadcast REQ", b"\x00\x02\x01x"),
         ("to itself", b"\x01\x00\x01x"),
     ):
-        a.feed(20000, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, payload))
+        a.feed(20000, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, payload))
         st[name] = a.take_output()[3:5]
     assert st == {"too long": b"05", "length lies": b"04", "broadcast REQ": b"05", "to itself": b"05"}
     # bad CRC, lowercase hex: no answer at all
     a.feed(20000, b"#0281C2\r\n#0281c1\r\n")
     assert a.take_output() == b"" and a.ignored == 2
     a.feed(20000, b"#03956A1F7F\n")  # SYS_REBOOT with its check word
-    assert a.take_output() == w.encode(w.SYNC_RSP, w.CID_SYS_REBOOT, b"\x00")
+    assert a.take_output() == sc.encode(sc.SYNC_RSP, sc.CID_SYS_REBOOT, b"\x00")
     a.feed(20100, b"#01C1C0\r")  # the port is closed while it restarts
     assert run_emulators((a,), 20100, 21100)[0].startswith(b"Blueprint Subsea")
     a.feed(21200, b"#01C1C0\r")
-    assert a.take_output() == w.encode(w.SYNC_RSP, w.CID_SYS_ALIVE, (1).to_bytes(4, "little"))
+    assert a.take_output() == sc.encode(sc.SYNC_RSP, sc.CID_SYS_ALIVE, (1).to_bytes(4, "little"))
 
 
 # -- two nodes over FakeUART, emulated beacons on one medium ---------------------
@@ -382,7 +383,7 @@ def test_absent_destination_fails_with_the_modem_reason():
     modemnet.check_absent(net, "XCVR_RESP_TIMEOUT")
 
 
-def faulted(fault, cid=w.CID_DAT_SEND, where="buoy", **kw):
+def faulted(fault, cid=sc.CID_DAT_SEND, where="buoy", **kw):
     # One acknowledged request from buoy to diver with `fault` armed on
     # `where`'s emulator; returns the net and the request id.
     net = Net()
@@ -397,27 +398,27 @@ def test_noise_bytes_on_the_line():
     r = net.send("buoy", "diver", b"through faults", ack=True)
     assert net.run(12000, until=net.done("buoy", r))
     junk = net.drivers["buoy"].junk
-    for kind in (w.JUNK_TEXT, w.JUNK_HEX, w.JUNK_OVERLONG, w.JUNK_TRUNCATED):
+    for kind in (sc.JUNK_TEXT, sc.JUNK_HEX, sc.JUNK_OVERLONG, sc.JUNK_TRUNCATED):
         assert junk.get(kind), (kind, junk)
     check_recovered(net, r)
 
 
 def test_wrong_checksum_on_a_command_status():
     net, r = faulted("corrupt_next")
-    assert net.drivers["buoy"].junk[w.JUNK_CRC] == 1
+    assert net.drivers["buoy"].junk[sc.JUNK_CRC] == 1
     check_recovered(net, r, "no response to DAT_SEND")
 
 
 def test_wrong_checksum_on_the_ack():
-    net, r = faulted("corrupt_next", w.CID_DAT_RECEIVE)
+    net, r = faulted("corrupt_next", sc.CID_DAT_RECEIVE)
     check_recovered(net, r, "no reply from the modem")
 
 
 def test_truncated_lines():
     net, r = faulted("truncate_next")
     check_recovered(net, r, "no response to DAT_SEND")
-    net, r = faulted("truncate_next", w.CID_DAT_RECEIVE, terminate=False)
-    assert net.drivers["buoy"].junk[w.JUNK_TRUNCATED] >= 1
+    net, r = faulted("truncate_next", sc.CID_DAT_RECEIVE, terminate=False)
+    assert net.drivers["buoy"].junk[sc.JUNK_TRUNCATED] >= 1
     check_recovered(net, r, "no reply from the modem")
 
 
@@ -446,7 +447,7 @@ def test_reboot_banner_mid_transfer():
 
 
 def test_reboot_announced_by_an_unsolicited_alive():
-    net, r = reboot_mid_transfer({"banner": (), "boot_message": w.CID_SYS_ALIVE})
+    net, r = reboot_mid_transfer({"banner": (), "boot_message": sc.CID_SYS_ALIVE})
     check_recovered(net, r, "modem rebooted")
 
 
@@ -467,7 +468,7 @@ def test_beacon_id_is_set_at_start_and_verified():
     # the buoy's driver wants 7: it writes the settings and restarts the beacon
     assert net.run(15000, until=lambda: net.drivers["buoy"].ready(net.clk()))
     assert emu.beacon_id == 7 and net.drivers["buoy"].beacon_id == 7
-    for cid in (w.CID_SETTINGS_SET, w.CID_SETTINGS_SAVE, w.CID_SYS_REBOOT):
+    for cid in (sc.CID_SETTINGS_SET, sc.CID_SETTINGS_SAVE, sc.CID_SYS_REBOOT):
         assert emu.commands[cid] == 1
     r = net.send("diver", "buoy", b"hello seven", ack=True)
     assert net.run(12000, until=net.done("diver", r))
@@ -543,29 +544,29 @@ def test_medium_delay_loss_and_half_duplex():
 def test_emulator_settings_and_transceiver_state():
     m = Medium()
     e = SeatracEmulator(m, 4)
-    e.feed(0, w.encode(w.SYNC_CMD, w.CID_SETTINGS_GET))
+    e.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_SETTINGS_GET))
     line = e.take_output()
     s = Sink()
-    w.LineReader(w.SYNC_RSP, s).feed(line)
+    w.LineReader(sc.SYNC_RSP, s).feed(line)
     rec = bytearray(s.msgs[0][1:])
     assert len(rec) == 110 and rec[96] == 4
     rec[96] = 9
-    e.feed(0, w.encode(w.SYNC_CMD, w.CID_SETTINGS_SET, rec))
-    assert e.take_output() == w.encode(w.SYNC_RSP, w.CID_SETTINGS_SET, b"\x00")
+    e.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_SETTINGS_SET, rec))
+    assert e.take_output() == sc.encode(sc.SYNC_RSP, sc.CID_SETTINGS_SET, b"\x00")
     assert e.beacon_id == 4  # takes effect only after a restart
-    e.feed(0, w.encode(w.SYNC_CMD, w.CID_SETTINGS_SET, rec[:50]))
+    e.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_SETTINGS_SET, rec[:50]))
     assert e.take_output()[3:5] == b"04"
-    e.feed(0, w.encode(w.SYNC_CMD, w.CID_XCVR_STATUS))
-    assert e.take_output() == w.encode(w.SYNC_RSP, w.CID_XCVR_STATUS, b"\x3b")  # idle
-    e.feed(0, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, b"\x00\x00\x02hi"))  # broadcast
+    e.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_XCVR_STATUS))
+    assert e.take_output() == sc.encode(sc.SYNC_RSP, sc.CID_XCVR_STATUS, b"\x3b")  # idle
+    e.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, b"\x00\x00\x02hi"))  # broadcast
     e.take_output()
-    e.feed(10, w.encode(w.SYNC_CMD, w.CID_XCVR_STATUS))
-    assert e.take_output() == w.encode(w.SYNC_RSP, w.CID_XCVR_STATUS, b"\x3c")  # transmitting
+    e.feed(10, sc.encode(sc.SYNC_CMD, sc.CID_XCVR_STATUS))
+    assert e.take_output() == sc.encode(sc.SYNC_RSP, sc.CID_XCVR_STATUS, b"\x3c")  # transmitting
     # saved, then restarted: the new id is live
-    e.feed(1000, w.encode(w.SYNC_CMD, w.CID_SETTINGS_SAVE) + w.encode(w.SYNC_CMD, w.CID_SYS_REBOOT, b"\x95\x6a"))
+    e.feed(1000, sc.encode(sc.SYNC_CMD, sc.CID_SETTINGS_SAVE) + sc.encode(sc.SYNC_CMD, sc.CID_SYS_REBOOT, b"\x95\x6a"))
     run_emulators((e,), 1000, 2100)
     assert e.beacon_id == 9 and e.xcvr.addr == 9
-    e.feed(2200, w.encode(w.SYNC_CMD, w.CID_SYS_REBOOT, b"\x00\x00"))
+    e.feed(2200, sc.encode(sc.SYNC_CMD, sc.CID_SYS_REBOOT, b"\x00\x00"))
     assert e.take_output()[3:5] == b"05"  # wrong check word: no restart
 
 
@@ -594,7 +595,7 @@ def test_driver_never_raises_on_random_messages():
                 cid, payload = plausible(rng, d)
                 if rng.chance(0.3):  # cut or lengthened
                     payload = payload[: rng.below(len(payload) + 1)] + rng.bytes(rng.below(3))
-                d.feed(now, w.encode(w.SYNC_RSP, cid, payload))
+                d.feed(now, sc.encode(sc.SYNC_RSP, cid, payload))
             else:
                 d.feed(now, rng.bytes(rng.range(1, 50)))
             d.poll(now)
@@ -611,8 +612,8 @@ def plausible(rng, d):
     # whatever the driver is waiting for about half of the time.
     cid = (1, 2, 0x10, 0x15, 0x40, 0x42, 0x43, 0x60, 0x61, 0x61, 0x63, 0x39)[rng.below(12)]
     slot = d.slot
-    if d._cmd in (w.CID_SYS_INFO, w.CID_SETTINGS_GET) and rng.chance(0.6):  # configuring
-        line = SYS_INFO_EXAMPLE if d._cmd == w.CID_SYS_INFO else settings_line(d.config.want_id)
+    if d._cmd in (sc.CID_SYS_INFO, sc.CID_SETTINGS_GET) and rng.chance(0.6):  # configuring
+        line = SYS_INFO_EXAMPLE if d._cmd == sc.CID_SYS_INFO else settings_line(d.config.want_id)
         return d._cmd, bytes(int(line[i : i + 2], 16) for i in range(3, len(line) - 6, 2))
     if slot.state == 2 and rng.chance(0.6):  # the status of our command
         cid = 0x40 if slot.kind else 0x60

@@ -6,6 +6,8 @@
 from binascii import unhexlify
 
 from acomm.drivers import seatrac_wire as w
+
+from acomm.drivers import seatrac_codes as sc
 from acomm.errors import AcommError, EncodeError
 from acomm.events import DELIVERED, EV_DRIVER_UP, EV_RECEIVED, EV_REPLIED, EV_STATUS
 from acomm_sim.medium import Medium
@@ -67,7 +69,7 @@ def test_queue_commands_answer_like_the_manual():
         ("bad dest", b"\x10\x01x"),
         ("no length", b"\x00"),
     ):
-        b.feed(0, w.encode(w.SYNC_CMD, w.CID_DAT_QUEUE_SET, payload))
+        b.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_DAT_QUEUE_SET, payload))
         st[name] = b.take_output()[3:5]
     assert st == {"too long": b"05", "length lies": b"04", "too much": b"05", "bad dest": b"05", "no length": b"04"}
     assert b.xcvr.queued is None
@@ -77,41 +79,41 @@ def test_queued_packet_rides_the_reply_and_third_parties_overhear_it():
     m, (a, b, c) = three(local_flag=True)
     b.feed(0, QSET_ABC)
     b.take_output()
-    a.feed(0, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, bytes((2, w.MSG_REQU, 2)) + b"Hi"))
+    a.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, bytes((2, sc.MSG_REQU, 2)) + b"Hi"))
     assert a.take_output() == b"$60000281DF\r\n"
     # request 660 ms on the air + 100 ms of sound, 310 ms turnaround, reply
     # 500 + 3 * 80 = 740 ms (240 longer than an empty one), 100 ms back
     out = run_emulators((a, b, c), 0, 1900)
-    assert messages(out[0], w.CID_DAT_RECEIVE) == []
+    assert messages(out[0], sc.CID_DAT_RECEIVE) == []
     out2 = run_emulators((a, b, c), 1910, 1920)
     out[2] += out2[2]
     out = [out2[0], out2[1], out[2]]
-    got = [dat_receive(p) for p in messages(out[0], w.CID_DAT_RECEIVE)]
-    assert got == [(1, 2, w.MSG_RESPU, 1, b"abc", 1)]  # the ack, with the data
+    got = [dat_receive(p) for p in messages(out[0], sc.CID_DAT_RECEIVE)]
+    assert got == [(1, 2, sc.MSG_RESPU, 1, b"abc", 1)]  # the ack, with the data
     assert b.xcvr.queued is None  # used up
     # beacon 3 heard the request to 2 and the reply to 1: passive listening
-    heard = [dat_receive(p) for p in messages(out[2] + run_emulators((a, b, c), 1930, 4000)[2], w.CID_DAT_RECEIVE)]
-    assert heard == [(2, 1, w.MSG_REQU, 0, b"Hi", 0), (1, 2, w.MSG_RESPU, 0, b"abc", 0)]
+    heard = [dat_receive(p) for p in messages(out[2] + run_emulators((a, b, c), 1930, 4000)[2], sc.CID_DAT_RECEIVE)]
+    assert heard == [(2, 1, sc.MSG_REQU, 0, b"Hi", 0), (1, 2, sc.MSG_RESPU, 0, b"abc", 0)]
     # the next request gets an empty reply: the third beacon hears nothing of it
-    a.feed(5000, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, bytes((2, w.MSG_REQU, 2)) + b"Hi"))
+    a.feed(5000, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, bytes((2, sc.MSG_REQU, 2)) + b"Hi"))
     out = run_emulators((a, b, c), 5000, 9000)
-    assert [dat_receive(p)[3:5] for p in messages(out[0], w.CID_DAT_RECEIVE)] == [(1, b"")]
-    assert [dat_receive(p)[:2] for p in messages(out[2], w.CID_DAT_RECEIVE)] == [(2, 1)]
+    assert [dat_receive(p)[3:5] for p in messages(out[0], sc.CID_DAT_RECEIVE)] == [(1, b"")]
+    assert [dat_receive(p)[:2] for p in messages(out[2], sc.CID_DAT_RECEIVE)] == [(2, 1)]
 
 
 def test_queue_for_one_asker_and_never_for_pings():
     m, (a, b, c) = three()
-    b.feed(0, w.encode(w.SYNC_CMD, w.CID_DAT_QUEUE_SET, b"\x03\x02ok"))  # for beacon 3 only
+    b.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_DAT_QUEUE_SET, b"\x03\x02ok"))  # for beacon 3 only
     assert b.take_output() == QSET_OK
-    a.feed(0, w.encode(w.SYNC_CMD, w.CID_PING_SEND, bytes((2, w.MSG_REQU))))
+    a.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_PING_SEND, bytes((2, sc.MSG_REQU))))
     run_emulators((a, b, c), 0, 3000)
-    a.feed(3000, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, bytes((2, w.MSG_REQU, 1)) + b"?"))
+    a.feed(3000, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, bytes((2, sc.MSG_REQU, 1)) + b"?"))
     out = run_emulators((a, b, c), 3000, 7000)
-    assert [dat_receive(p)[3:5] for p in messages(out[0], w.CID_DAT_RECEIVE)] == [(1, b"")]
+    assert [dat_receive(p)[3:5] for p in messages(out[0], sc.CID_DAT_RECEIVE)] == [(1, b"")]
     assert b.xcvr.queued == (3, b"ok")
-    c.feed(8000, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, bytes((2, w.MSG_REQ, 1)) + b"?"))
+    c.feed(8000, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, bytes((2, sc.MSG_REQ, 1)) + b"?"))
     out = run_emulators((a, b, c), 8000, 12000)
-    assert [dat_receive(p)[2:5] for p in messages(out[2], w.CID_DAT_RECEIVE)] == [(w.MSG_RESP, 1, b"ok")]
+    assert [dat_receive(p)[2:5] for p in messages(out[2], sc.CID_DAT_RECEIVE)] == [(sc.MSG_RESP, 1, b"ok")]
     assert b.xcvr.queued is None
 
 
@@ -119,11 +121,11 @@ def test_a_long_reply_at_long_range_is_heard_out():
     # the range timeout covers the reply's return, not its data
     m, (a, b, c) = three()
     m.set_distance(1, 2, 990.0)
-    b.feed(0, w.encode(w.SYNC_CMD, w.CID_DAT_QUEUE_SET, b"\x00\x1f" + bytes(range(31))))
-    a.feed(0, w.encode(w.SYNC_CMD, w.CID_DAT_SEND, bytes((2, w.MSG_REQU, 1)) + b"?"))
+    b.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_DAT_QUEUE_SET, b"\x00\x1f" + bytes(range(31))))
+    a.feed(0, sc.encode(sc.SYNC_CMD, sc.CID_DAT_SEND, bytes((2, sc.MSG_REQU, 1)) + b"?"))
     out = run_emulators((a, b, c), 0, 8000)
-    got = [dat_receive(p) for p in messages(out[0], w.CID_DAT_RECEIVE)]
-    assert got and got[0][3:5] == (1, bytes(range(31))) and messages(out[0], w.CID_DAT_ERROR) == []
+    got = [dat_receive(p) for p in messages(out[0], sc.CID_DAT_RECEIVE)]
+    assert got and got[0][3:5] == (1, bytes(range(31))) and messages(out[0], sc.CID_DAT_ERROR) == []
 
 
 def test_driver_queue_reply_goes_through_the_command_slot():
@@ -134,7 +136,7 @@ def test_driver_queue_reply_goes_through_the_command_slot():
     assert d.take_output() == b""  # behind the queue command
     d.feed(30, QSET_OK)
     assert d.queued_reply == b"abc" and d.take_output().startswith(b"#600204")
-    d.feed(40, w.encode(w.SYNC_RSP, w.CID_DAT_SEND, b"\x00\x02"))
+    d.feed(40, sc.encode(sc.SYNC_RSP, sc.CID_DAT_SEND, b"\x00\x02"))
     d.queue_reply(50, None)
     assert d.take_output() == QCLR
     d.feed(60, QCLR_OK)
@@ -142,7 +144,7 @@ def test_driver_queue_reply_goes_through_the_command_slot():
     # refused: the reason is kept; silent: written again
     d.queue_reply(100, b"abc")
     d.take_output()
-    d.feed(110, w.encode(w.SYNC_RSP, w.CID_DAT_QUEUE_SET, b"\x05"))
+    d.feed(110, sc.encode(sc.SYNC_RSP, sc.CID_DAT_QUEUE_SET, b"\x05"))
     assert d.queue_problem == "CMD_PARAM_INVALID" and d.stats["queue_refused"] == 1
     d.queue_reply(200, b"abc")
     assert d.take_output() == QSET_ABC
@@ -172,18 +174,18 @@ def test_driver_forgets_the_queue_when_interrogated_and_requeues_after_a_reboot(
     d.take_output()
     d.feed(20, QSET_OK)
     # beacon 2 asks us (MSG_REQU to 1): our beacon's reply takes the packet
-    req = bytes((1, 2, 0, w.MSG_REQU)) + bytes(12) + b"\x00\x01?"
-    d.feed(100, w.encode(w.SYNC_RSP, w.CID_DAT_RECEIVE, req))
+    req = bytes((1, 2, 0, sc.MSG_REQU)) + bytes(12) + b"\x00\x01?"
+    d.feed(100, sc.encode(sc.SYNC_RSP, sc.CID_DAT_RECEIVE, req))
     assert d.queued_reply is None and d.take_events()[-1] == (EV_REPLIED,)
     assert set_up_again(d, 150) == b""  # nothing to queue again: the reply took it
     d.queue_reply(200, b"new")
     d.take_output()
-    d.feed(210, w.encode(w.SYNC_RSP, w.CID_DAT_QUEUE_SET, b"\x00"))
-    assert set_up_again(d, 300) == w.encode(w.SYNC_CMD, w.CID_DAT_QUEUE_SET, b"\x00\x03new")
+    d.feed(210, sc.encode(sc.SYNC_RSP, sc.CID_DAT_QUEUE_SET, b"\x00"))
+    assert set_up_again(d, 300) == sc.encode(sc.SYNC_CMD, sc.CID_DAT_QUEUE_SET, b"\x00\x03new")
     assert d.queued_reply is None  # until the beacon confirms it
 
 
-def world3(overhear=True, diver_part=w.PART_X110, **emu):
+def world3(overhear=True, diver_part=sc.PART_X110, **emu):
     wd = World(seed=5)
     lo = {"advert_period_ms": 3600000, "overhear": overhear}
     wd.add("buoy", 1, "seatrac", position=(-30.0, 0.0, 0.5), link_opts=lo, emu_opts=dict(emu))
@@ -240,9 +242,9 @@ def test_usbl_bearing_noise_is_bounded_and_repeats():
         out = []
         for k in range(20):
             t = k * 5000
-            a.feed(t, w.encode(w.SYNC_CMD, w.CID_PING_SEND, bytes((2, w.MSG_REQU))))
+            a.feed(t, sc.encode(sc.SYNC_CMD, sc.CID_PING_SEND, bytes((2, sc.MSG_REQU))))
             o = run_emulators((a, b), t, t + 4000)[0]
-            for p in messages(o, w.CID_PING_RESP):
+            for p in messages(o, sc.CID_PING_RESP):
                 out.append(w.fix_dict(p, 0))
         return out
 

@@ -1,34 +1,70 @@
-# Modules on a board's path keep acomm.events' codes as private constants
-# (`_EV_RX = const(1)`): MicroPython inlines them and they cost no RAM,
-# where `from .events import EV_RX` took a slot in the module's dict on the
-# board's heap. The values are copies, so this checks every copy against
-# acomm.events, the one source: a renumbered code cannot drift.
+# Modules on a board's path keep the codes of a few source modules as
+# private constants (`_EV_RX = const(1)`, `_CID_DAT_SEND = const(0x60)`):
+# MicroPython inlines them and they cost no RAM, where a public name took a
+# slot in a module's dict and an entry in the string pool on the board's
+# heap. The values are copies, so this checks every copy against its one
+# source: a renumbered code cannot drift.
+#   acomm.events                  its copies anywhere in acomm/
+#   acomm.drivers.seatrac_codes   its copies in the SeaTrac driver's modules
 import os
 import re
 
+import acomm.drivers.seatrac_codes as seatrac_codes
 import acomm.events as events
 
 ROOT = os.path.join(os.path.dirname(__file__), "..", "..", "acomm")
 PRIVATE = re.compile(r"^_([A-Z][A-Z0-9_]*) = const\((.+?)\)", re.M)
+# (source module, its file, which files may hold copies of it)
+SOURCES = (
+    (events, "events.py", lambda rel: True),
+    (seatrac_codes, os.path.join("drivers", "seatrac_codes.py"),
+     lambda rel: os.path.basename(rel).startswith("seatrac")),
+)
 
 
-def _copies():
+def _copies(source, own, scope):
     for folder, _, files in os.walk(ROOT):
         for f in files:
             if f.endswith(".py"):
                 path = os.path.join(folder, f)
+                rel = os.path.relpath(path, ROOT)
+                if rel == own or not scope(rel):
+                    continue
                 with open(path) as fh:
                     for name, value in PRIVATE.findall(fh.read()):
-                        if hasattr(events, name) and not path.endswith("events.py"):
-                            yield os.path.relpath(path, ROOT), name, value
+                        if hasattr(source, name):
+                            yield rel, name, value
+
+
+def _wrong(source, found):
+    return ["%s: _%s = %s, %s has %r" % (p, n, v, source.__name__, getattr(source, n))
+            for p, n, v in found if int(v, 0) != getattr(source, n)]
 
 
 def test_every_private_copy_of_an_event_code_is_the_events_value():
-    found = list(_copies())
+    found = list(_copies(*SOURCES[0]))
     assert len(found) > 40  # the link alone keeps 24
-    wrong = ["%s: _%s = %s, acomm.events has %r" % (p, n, v, getattr(events, n))
-             for p, n, v in found if int(v, 0) != getattr(events, n)]
+    wrong = _wrong(events, found)
     assert not wrong, "\n".join(wrong)
+
+
+def test_every_private_copy_of_a_seatrac_code_is_seatrac_codes_value():
+    found = list(_copies(*SOURCES[1]))
+    assert len(found) > 40  # the driver, its sequences and its wire module
+    assert {p for p, _, _ in found} == {os.path.join("drivers", f) for f in
+                                       ("seatrac.py", "seatrac_sequences.py", "seatrac_wire.py")}
+    wrong = _wrong(seatrac_codes, found)
+    assert not wrong, "\n".join(wrong)
+
+
+def test_no_module_of_the_seatrac_driver_keeps_a_public_copy():
+    # a public `CID_X = const(...)` in the driver's modules would put the
+    # name back on a board's heap (and be a second source)
+    for f in ("seatrac.py", "seatrac_sequences.py", "seatrac_wire.py"):
+        with open(os.path.join(ROOT, "drivers", f)) as fh:
+            text = fh.read()
+        public = [n for n in re.findall(r"^([A-Z][A-Z0-9_]*) = const", text, re.M) if hasattr(seatrac_codes, n)]
+        assert not public, (f, public)
 
 
 def test_the_check_sees_a_wrong_copy(tmp_path):
@@ -36,3 +72,4 @@ def test_the_check_sees_a_wrong_copy(tmp_path):
     src = "_EV_RX = const(%d)\n" % (events.EV_RX + 1)
     (name, value), = PRIVATE.findall(src)
     assert name == "EV_RX" and int(value, 0) != events.EV_RX
+    assert _wrong(events, [("x.py", name, value)])

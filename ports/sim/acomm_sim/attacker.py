@@ -9,7 +9,7 @@
 # send(now, src, dst, data) transmits a one-way DAT packet as if from src.
 # It never sends on its own.
 
-from acomm.drivers import seatrac_wire as w
+from acomm.drivers import seatrac_codes as sc
 
 from .seatrac_xcvr import PROTO_DAT, Packet
 
@@ -33,7 +33,7 @@ class Attacker:
         if self.heard is not None:
             self.heard(t, p)
 
-    def send(self, now, src, dst, data, mtype=w.MSG_OWAY):
+    def send(self, now, src, dst, data, mtype=sc.MSG_OWAY):
         # -> when the packet has left; it arrives as from beacon src
         self.sent += 1
         return self.channel.transmit(now, self.addr, Packet(PROTO_DAT, src, dst, mtype, bytes(data)),

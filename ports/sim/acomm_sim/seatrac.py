@@ -20,6 +20,7 @@
 
 from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers import seatrac_wire as w
+from acomm.drivers import seatrac_codes as sc
 
 from acomm.drivers.base import SansIO
 
@@ -54,7 +55,7 @@ class SeatracEmulator(SansIO, FaultModes):
         medium,
         beacon_id=1,
         now=0,
-        part=w.PART_X150,
+        part=sc.PART_X150,
         serial=3689,
         uptime_ms=0,
         mtu=30,
@@ -76,7 +77,7 @@ class SeatracEmulator(SansIO, FaultModes):
         self.serial = serial
         self.mtu = mtu
         self.banner = banner
-        self.boot_message = boot_message  # None, w.CID_SYS_ALIVE or w.CID_SYS_INFO
+        self.boot_message = boot_message  # None, sc.CID_SYS_ALIVE or sc.CID_SYS_INFO
         self.boot_ms = boot_ms
         # firmware as in the manual's SYS_INFO example
         self.boot_fw = (0xFF, 912, 1, 0, 361, 0xBFC5FAB7)
@@ -92,9 +93,9 @@ class SeatracEmulator(SansIO, FaultModes):
         self._boot_at = ticks_add(now, -uptime_ms)
         self._booting_until = None
         self._now = now
-        self._dec = w.LineReader(w.SYNC_CMD, self)
+        self._dec = w.LineReader(sc.SYNC_CMD, self)
         self._out = bytearray()
-        self._line = bytearray(2 * w.MAX_MSG + 8)
+        self._line = bytearray(2 * sc.MAX_MSG + 8)
         self._faults = []  # [kind, cid or None, count, execute]
         self._mute = 0  # CID whose answer is swallowed
         self.commands = {}  # CID -> count, for tests
@@ -107,7 +108,7 @@ class SeatracEmulator(SansIO, FaultModes):
 
     @property
     def usbl(self):
-        return self.part == w.PART_X150
+        return self.part == sc.PART_X150
 
     def uptime_ms(self, now):
         return ticks_diff(now, self._boot_at)
@@ -135,7 +136,7 @@ class SeatracEmulator(SansIO, FaultModes):
         msg[0] = cid
         msg[1:] = payload
         line = self._line
-        k = w.encode_into(line, w.SYNC_RSP, msg, len(msg))
+        k = w.encode_into(line, sc.SYNC_RSP, msg, len(msg))
         f = self._fault(("corrupt", "truncate"), cid)
         if f is not None and f[0] == "corrupt":
             digit_off(line, k - 3)
@@ -164,9 +165,9 @@ class SeatracEmulator(SansIO, FaultModes):
     def _booted(self, now):
         self._join_medium(self.beacon_id)
         self._print_banner()
-        if self.boot_message == w.CID_SYS_ALIVE:
+        if self.boot_message == sc.CID_SYS_ALIVE:
             self._alive()
-        elif self.boot_message == w.CID_SYS_INFO:
+        elif self.boot_message == sc.CID_SYS_INFO:
             self._info()
 
     # -- commands ----------------------------------------------------------------
@@ -184,55 +185,55 @@ class SeatracEmulator(SansIO, FaultModes):
             if not f[3]:
                 return
             self._mute = cid
-        if cid == w.CID_SYS_ALIVE:
+        if cid == sc.CID_SYS_ALIVE:
             self._alive()
-        elif cid == w.CID_SYS_INFO:
+        elif cid == sc.CID_SYS_INFO:
             self._info()
-        elif cid == w.CID_SYS_REBOOT:
+        elif cid == sc.CID_SYS_REBOOT:
             if n < 3:
-                self._status(cid, w.CST_CMD_PARAM_MISSING)
-            elif w.u16(b, 1) != w.REBOOT_CHECK:
-                self._status(cid, w.CST_CMD_PARAM_INVALID)
+                self._status(cid, sc.CST_CMD_PARAM_MISSING)
+            elif w.u16(b, 1) != sc.REBOOT_CHECK:
+                self._status(cid, sc.CST_CMD_PARAM_INVALID)
             else:
-                self._status(cid, w.CST_OK)
+                self._status(cid, sc.CST_OK)
                 self.reboot(now)
-        elif cid == w.CID_STATUS:
+        elif cid == sc.CID_STATUS:
             self._status_report(b[1] if n >= 2 and b[1] else self.settings[1])
-        elif cid == w.CID_SETTINGS_GET:
+        elif cid == sc.CID_SETTINGS_GET:
             self.emit(cid, self.settings)
-        elif cid == w.CID_SETTINGS_SET:
+        elif cid == sc.CID_SETTINGS_SET:
             if n - 1 < len(self.settings):
-                self._status(cid, w.CST_CMD_PARAM_MISSING)
+                self._status(cid, sc.CST_CMD_PARAM_MISSING)
             elif n - 1 > len(self.settings) or not 1 <= b[97] <= 15:
-                self._status(cid, w.CST_CMD_PARAM_INVALID)
+                self._status(cid, sc.CST_CMD_PARAM_INVALID)
             else:
                 self.settings[:] = memoryview(b)[1:n]
-                self._status(cid, w.CST_OK)
-        elif cid == w.CID_SETTINGS_LOAD:
+                self._status(cid, sc.CST_OK)
+        elif cid == sc.CID_SETTINGS_LOAD:
             self.settings = bytearray(self.eeprom)
-            self._status(cid, w.CST_OK)
-        elif cid == w.CID_SETTINGS_SAVE:
+            self._status(cid, sc.CST_OK)
+        elif cid == sc.CID_SETTINGS_SAVE:
             self.eeprom = bytearray(self.settings)
-            self._status(cid, w.CST_OK)
-        elif cid == w.CID_SETTINGS_RESET:
+            self._status(cid, sc.CST_OK)
+        elif cid == sc.CID_SETTINGS_RESET:
             self.settings = default_settings(self.beacon_id)
-            self._status(cid, w.CST_OK)
-        elif cid == w.CID_XCVR_STATUS:
+            self._status(cid, sc.CST_OK)
+        elif cid == sc.CID_XCVR_STATUS:
             self._status(cid, self.xcvr.state(now))
-        elif cid == w.CID_PING_SEND:
+        elif cid == sc.CID_PING_SEND:
             st = self.xcvr.ping_send(now, b, n)
             self.emit(cid, bytes((st, b[1] if n >= 2 else 0)))
             self.xcvr.started(now, st)
-        elif cid == w.CID_DAT_SEND:
+        elif cid == sc.CID_DAT_SEND:
             st = self.xcvr.dat_send(now, b, n)
             self.emit(cid, bytes((st, b[1] if n >= 2 else 0)))
             self.xcvr.started(now, st)
-        elif cid == w.CID_DAT_QUEUE_SET:
+        elif cid == sc.CID_DAT_QUEUE_SET:
             self._status(cid, self.xcvr.queue_set(b, n))
-        elif cid == w.CID_DAT_QUEUE_CLR:
+        elif cid == sc.CID_DAT_QUEUE_CLR:
             self.xcvr.queued = None
-            self._status(cid, w.CST_OK)
-        elif cid == w.CID_DAT_QUEUE_STATUS:
+            self._status(cid, sc.CST_OK)
+        elif cid == sc.CID_DAT_QUEUE_STATUS:
             q = self.xcvr.queued
             self._status(cid, len(q[1]) if q is not None else 0)
         else:
@@ -244,7 +245,7 @@ class SeatracEmulator(SansIO, FaultModes):
         self.emit(cid, bytes((st,)))
 
     def _alive(self):
-        self.emit(w.CID_SYS_ALIVE, (self.uptime_ms(self._now) // 1000).to_bytes(4, "little"))
+        self.emit(sc.CID_SYS_ALIVE, (self.uptime_ms(self._now) // 1000).to_bytes(4, "little"))
 
     def _info(self):
         p = bytearray(38)
@@ -260,7 +261,7 @@ class SeatracEmulator(SansIO, FaultModes):
             p[o + 4] = fw[3]
             p[o + 5 : o + 7] = fw[4].to_bytes(2, "little")
             p[o + 7 : o + 11] = fw[5].to_bytes(4, "little")
-        self.emit(w.CID_SYS_INFO, p)
+        self.emit(sc.CID_SYS_INFO, p)
 
     def _status_report(self, flags):
         # Groups in bit order; the calibration and raw AHRS groups are
@@ -281,7 +282,7 @@ class SeatracEmulator(SansIO, FaultModes):
         for bit, size in ((0x08, 12), (0x10, 18), (0x20, 36)):
             if flags & bit:
                 p.extend(bytes(size))
-        self.emit(w.CID_STATUS, p)
+        self.emit(sc.CID_STATUS, p)
 
 
 def _le(v, n):

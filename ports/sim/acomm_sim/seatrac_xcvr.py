@@ -27,14 +27,14 @@
 from math import atan2, cos, degrees, radians, sin, sqrt
 
 from acomm.compat import ticks_add, ticks_diff
-from acomm.drivers import seatrac_wire as w
+from acomm.drivers import seatrac_codes as sc
 from acomm.prng import Prng
 
 PROTO_PING = 0  # APAYLOAD_E
 PROTO_DAT = 3
 
-_REQ = (w.MSG_REQ, w.MSG_REQU, w.MSG_REQX)
-_SEND_TYPES = (w.MSG_OWAY, w.MSG_OWAYU, w.MSG_REQ, w.MSG_REQU, w.MSG_REQX)
+_REQ = (sc.MSG_REQ, sc.MSG_REQU, sc.MSG_REQX)
+_SEND_TYPES = (sc.MSG_OWAY, sc.MSG_OWAYU, sc.MSG_REQ, sc.MSG_REQU, sc.MSG_REQX)
 
 
 class Packet:
@@ -103,53 +103,53 @@ class Transceiver:
 
     def state(self, now):
         if self._tx_until is not None and ticks_diff(self._tx_until, now) > 0:
-            return w.CST_XCVR_STATE_TX
+            return sc.CST_XCVR_STATE_TX
         if self._reply is not None:
-            return w.CST_XCVR_STATE_RESP
+            return sc.CST_XCVR_STATE_RESP
         if self._pending is not None:
-            return w.CST_XCVR_STATE_REQ
-        return w.CST_XCVR_STATE_IDLE
+            return sc.CST_XCVR_STATE_REQ
+        return sc.CST_XCVR_STATE_IDLE
 
     # -- commands ------------------------------------------------------------------
     def ping_send(self, now, b, n):
         if n < 3:
-            return w.CST_CMD_PARAM_MISSING
+            return sc.CST_CMD_PARAM_MISSING
         dest, mtype = b[1], b[2]
         if not 1 <= dest <= 15 or dest == self.addr or mtype not in _REQ or n > 3:
-            return w.CST_CMD_PARAM_INVALID
+            return sc.CST_CMD_PARAM_INVALID
         if self.busy(now):
-            return w.CST_XCVR_BUSY
+            return sc.CST_XCVR_BUSY
         self._next = Packet(PROTO_PING, self.addr, dest, mtype)
-        return w.CST_OK
+        return sc.CST_OK
 
     def dat_send(self, now, b, n):
         if n < 4 or n - 4 < b[3]:
-            return w.CST_CMD_PARAM_MISSING
+            return sc.CST_CMD_PARAM_MISSING
         dest, mtype, ln = b[1], b[2], b[3]
         if n - 4 > ln or ln > self.beacon.mtu or dest > 15 or dest == self.addr or mtype not in _SEND_TYPES:
-            return w.CST_CMD_PARAM_INVALID
-        if dest == w.BEACON_ALL and mtype not in (w.MSG_OWAY, w.MSG_OWAYU):
-            return w.CST_CMD_PARAM_INVALID
+            return sc.CST_CMD_PARAM_INVALID
+        if dest == sc.BEACON_ALL and mtype not in (sc.MSG_OWAY, sc.MSG_OWAYU):
+            return sc.CST_CMD_PARAM_INVALID
         if self.busy(now):
-            return w.CST_XCVR_BUSY
+            return sc.CST_XCVR_BUSY
         self._next = Packet(PROTO_DAT, self.addr, dest, mtype, bytes(b[4 : 4 + ln]))
-        return w.CST_OK
+        return sc.CST_OK
 
     def queue_set(self, b, n):
         # DAT_QUEUE_SET: DEST_ID, PACKET_LEN, PACKET_DATA (the layout
         # UNIZG-FER's driver writes); dest 0 lets any beacon's request take it
         if n < 3 or n - 3 < b[2]:
-            return w.CST_CMD_PARAM_MISSING
+            return sc.CST_CMD_PARAM_MISSING
         if n - 3 > b[2] or b[2] > 31 or b[1] > 15:
-            return w.CST_CMD_PARAM_INVALID
+            return sc.CST_CMD_PARAM_INVALID
         self.queued = (b[1], bytes(b[3:n]))
-        return w.CST_OK
+        return sc.CST_OK
 
     def started(self, now, status):
         # after the command's status line: put the accepted packet on the air
         p = self._next
         self._next = None
-        if status != w.CST_OK or p is None:
+        if status != sc.CST_OK or p is None:
             return
         air = self.airtime(len(p.data))
         self._transmit(now, p, air)
@@ -171,8 +171,8 @@ class Transceiver:
             if s is not None and ticks_diff(s, pd[3]) <= 0:
                 return  # the reply's signal came back in time: hear it out
             self._pending = None
-            cid = w.CID_PING_ERROR if pd[0] == PROTO_PING else w.CID_DAT_ERROR
-            self.beacon.emit(cid, bytes((w.CST_XCVR_RESP_TIMEOUT, pd[1])))
+            cid = sc.CID_PING_ERROR if pd[0] == PROTO_PING else sc.CID_DAT_ERROR
+            self.beacon.emit(cid, bytes((sc.CST_XCVR_RESP_TIMEOUT, pd[1])))
 
     # -- the medium --------------------------------------------------------------
     def receive(self, t, src, p, dist):
@@ -181,19 +181,19 @@ class Transceiver:
             return
         self.heard += 1
         mine = p.dst == self.addr
-        if p.mtype in _REQ or p.mtype in (w.MSG_OWAY, w.MSG_OWAYU):
-            if p.proto == PROTO_DAT and (mine or p.dst == w.BEACON_ALL or self.hear_all):
-                flags = w.FIX_USBL if (p.mtype == w.MSG_OWAYU and b.usbl) else 0
+        if p.mtype in _REQ or p.mtype in (sc.MSG_OWAY, sc.MSG_OWAYU):
+            if p.proto == PROTO_DAT and (mine or p.dst == sc.BEACON_ALL or self.hear_all):
+                flags = sc.FIX_USBL if (p.mtype == sc.MSG_OWAYU and b.usbl) else 0
                 self._report_dat(p, flags, dist, 0)
             if mine and p.mtype in _REQ:
                 if p.proto == PROTO_PING:
-                    b.emit(w.CID_PING_REQ, self.fix(p.dst, src, 0, p.mtype, dist))
+                    b.emit(sc.CID_PING_REQ, self.fix(p.dst, src, 0, p.mtype, dist))
                 if self._pending is None and self._reply is None:
                     # the firmware answers by itself
                     due = ticks_add(t, self.resp_delay())
                     q = self.queued
                     data = b""
-                    if p.proto == PROTO_DAT and q is not None and q[0] in (w.BEACON_ALL, src):
+                    if p.proto == PROTO_DAT and q is not None and q[0] in (sc.BEACON_ALL, src):
                         data = q[1]
                         self.queued = None
                     self._reply = [due, Packet(p.proto, self.addr, src, p.mtype + 1, data)]
@@ -201,18 +201,18 @@ class Transceiver:
         if not mine:
             # someone else's reply: heard only when it carries data
             if p.proto == PROTO_DAT and p.data and self.hear_all:
-                self._report_dat(p, w.FIX_USBL if (b.usbl and p.mtype != w.MSG_RESP) else 0, dist, 0)
+                self._report_dat(p, sc.FIX_USBL if (b.usbl and p.mtype != sc.MSG_RESP) else 0, dist, 0)
             return
         # a reply: only the beacon that asked, for the beacon it asked
         pd = self._pending
         if pd is None or pd[0] != p.proto or pd[1] != src or p.mtype != pd[2] + 1:
             return
         self._pending = None
-        flags = w.FIX_RANGE
-        if b.usbl and p.mtype != w.MSG_RESP:
-            flags |= w.FIX_USBL | w.FIX_POSITION
+        flags = sc.FIX_RANGE
+        if b.usbl and p.mtype != sc.MSG_RESP:
+            flags |= sc.FIX_USBL | sc.FIX_POSITION
         if p.proto == PROTO_PING:
-            b.emit(w.CID_PING_RESP, self.fix(self.addr, src, flags, p.mtype, dist))
+            b.emit(sc.CID_PING_RESP, self.fix(self.addr, src, flags, p.mtype, dist))
         else:
             self._report_dat(p, flags, dist, 1)
 
@@ -222,8 +222,8 @@ class Transceiver:
         fix.append(len(p.data))
         fix.extend(p.data)
         if self.local_flag:
-            fix.append(1 if p.dst in (self.addr, w.BEACON_ALL) else 0)
-        self.beacon.emit(w.CID_DAT_RECEIVE, fix)
+            fix.append(1 if p.dst in (self.addr, sc.BEACON_ALL) else 0)
+        self.beacon.emit(sc.CID_DAT_RECEIVE, fix)
 
     def fix(self, dest, src, flags, mtype, dist):
         # A well-formed ACO_FIX_T of what this beacon heard from src.
@@ -238,7 +238,7 @@ class Transceiver:
             d += (self.rng.below(2001) - 1000) * self.range_noise_m / 1000
             if d < 0:
                 d = 0.0
-        if flags & w.FIX_RANGE:
+        if flags & sc.FIX_RANGE:
             t = 2 * d * 10 / (vos or 15000)  # round trip, s
             f.extend(_le(round(t * 16000), 4) + _le(round(t * 1e7), 4) + _le(round(d * 10), 2))
         off = self.medium.offset(self.addr, src)
@@ -247,21 +247,21 @@ class Transceiver:
         horiz = sqrt(off[0] * off[0] + off[1] * off[1])
         az = degrees(atan2(off[0], off[1]))
         el = degrees(atan2(-off[2], horiz))
-        if flags & w.FIX_USBL and self.bearing_noise_deg:
+        if flags & sc.FIX_USBL and self.bearing_noise_deg:
             az += (self.rng.below(2001) - 1000) * self.bearing_noise_deg / 1000
             el += (self.rng.below(2001) - 1000) * self.bearing_noise_deg / 1000
         if self.range_noise_m or self.bearing_noise_deg:
             # the position is what the noisy range and angles give
             h = d * cos(radians(el))
             off = (h * sin(radians(az)), h * cos(radians(az)), -d * sin(radians(el)))
-        if flags & w.FIX_USBL:
+        if flags & sc.FIX_USBL:
             f.append(4)
             for _ in range(4):
                 f.extend(_le(b.rssi, 2))
             f.extend(_le(round(az * 10), 2))
             f.extend(_le(round(el * 10), 2))
             f.extend(_le(0, 2))  # fit error
-        if flags & w.FIX_POSITION:
+        if flags & sc.FIX_POSITION:
             f.extend(_le(_clamp16(round(off[0] * 10)), 2))
             f.extend(_le(_clamp16(round(off[1] * 10)), 2))
             f.extend(_le(_clamp16(round((off[2] + b.env[3] / 10) * 10)), 2))

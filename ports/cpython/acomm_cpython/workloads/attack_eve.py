@@ -8,7 +8,7 @@ from acomm import frame as fr
 from acomm.transport import segment as sg
 from acomm.catalog import teleop
 from acomm.codec.compress import compress
-from acomm.drivers import seatrac_wire as sw
+from acomm.drivers import seatrac_codes as sc
 
 from ..demo.mission import ADDR, AUV, BUOY, DIVER
 
@@ -41,7 +41,7 @@ class Forger:
             self.recorded.append((p.src, p.dst, p.data))
             if len(self.recorded) > 40:
                 self.recorded.pop(0)
-        if ftype == fr.DATA and p.mtype in (sw.MSG_REQ, sw.MSG_REQU, sw.MSG_REQX):
+        if ftype == fr.DATA and p.mtype in (sc.MSG_REQ, sc.MSG_REQU, sc.MSG_REQX):
             # after the beacon's own reply would have ended (not to jam it:
             # a jammer needs no key), before the asker gives up on it
             self._forge(t + 1200, p.dst, p.src, fr.encode_elided(fr.Frame(fr.ACK, 0, 0, seq)), "ack")
@@ -86,7 +86,7 @@ class Forger:
             self._offset = r.below(40000)  # when in the next minute: not in step with the TDMA cycle
             # an advert claiming a node's id, from the attacker's beacon
             claim = ADDR[NAMES[(minute + 1) % 3]]
-            self._forge(now, EVE, sw.BEACON_ALL, fr.encode_elided(fr.Frame(fr.ADVERT, 0, 0, minute % 16,
+            self._forge(now, EVE, sc.BEACON_ALL, fr.encode_elided(fr.Frame(fr.ADVERT, 0, 0, minute % 16,
                                                                            bytes((claim, 15)))), "advert")
             # replays of sealed frames heard: to the same node, and to another
             for src, dst, data in self.recorded[-3:]:
@@ -94,7 +94,7 @@ class Forger:
                 again[0] = (again[0] & 0xF0) | ((again[0] + 5) & 0x0F)
                 self._forge(now + 500, src, dst, bytes(again), "replay_same")
                 self._forge(now + 500, src, dst, data, "replay_same")
-                if dst != sw.BEACON_ALL:  # a broadcast is for the other node too
+                if dst != sc.BEACON_ALL:  # a broadcast is for the other node too
                     other = [a for a in ADDR.values() if a not in (src, dst)][0]
                     self._forge(now + 1000, src, other, data, "replay_other")
             if self.restarted:

@@ -137,7 +137,7 @@ CADDY_SEEN_DIVER = (30.0, 10.0, 12.0)  # 11 m from Buddy
 
 
 def caddy_run(seen, sim_ms=300000):
-    from acomm.drivers import seatrac_wire as sw
+    from acomm.drivers import seatrac_codes as sc
     from acomm_sim.caddy import CaddyCycle
 
     pos = dict(CADDY_POS)
@@ -147,7 +147,7 @@ def caddy_run(seen, sim_ms=300000):
     for name, nid in (("pladypos", 1), ("buddy", 2), ("diver", 3)):
         emu = {"range_noise_m": 0.2, "bearing_noise_deg": 1.0, "seed": nid}
         if nid == 3:
-            emu["part"] = sw.PART_X110
+            emu["part"] = sc.PART_X110
         w.add(name, nid, "seatrac", position=pos[nid], emu_opts=emu, link_opts={"advert_period_ms": 3600000})
     w.run(20000, until=lambda: all(sn.driver.ready(w.now()) for sn in w.nodes.values()))
     cyc = CaddyCycle(w, pladypos="pladypos", buddy="buddy", diver="diver").start(w.now())
