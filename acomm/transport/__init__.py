@@ -50,7 +50,7 @@ from .arq import Outgoing, Reassembly
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, StoreFull
 from ..frame import SEGMENT
-from .packetstore import DONE_MEMORY, MemoryStore, PacketStore
+from .packetstore import DONE_MEMORY, PacketStore
 from .route import MEDIUM_ALL, Router
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
@@ -71,9 +71,6 @@ _MAX_RX = const(8)
 _PIPELINE = const(3)  # fragments of one transfer in a link queue at a time
 _STALL_POLLS = const(3)  # unanswered polls in a row before trying another link
 _FULL_WAIT_MS = const(60000)  # a relay that was full is asked again after this
-
-__all__ = ("Transport", "MemoryStore")
-
 
 class _Room:
     # what the store's overflow rule needs to judge a packet not yet whole
@@ -96,14 +93,19 @@ class Transport:
                  compress=True, urgent=4):
         """node_id: this node's id; names: its acomm.link.names.NameTable; links: name -> Link (read
         live); next_id(): a fresh link request id; emit(ev): where the transport's events go. store:
-        a packetstore backend (MemoryStore when None); wall(): the wall clock in seconds (lifespans)."""
+        a packetstore backend (a MemoryStore when None); wall(): the wall clock in seconds (lifespans)."""
         self.node_id = node_id
         self.names = names
         self._next_id = next_id
         self._emit = emit
         self.guard = None  # acomm.link.guard.Guard and acomm.frame.auth.Auth with a key: Node.set_auth sets them
         self.auth = None
-        self.packets = PacketStore(store if store is not None else MemoryStore(), urgent)
+        if store is None:
+            # imported here: a board with a file store never loads it
+            from .memorystore import MemoryStore
+
+            store = MemoryStore()
+        self.packets = PacketStore(store, urgent)
         self.router = Router(names, links, routes, urgent)
         self.wall = wall or _wall_default
         self.max_packet = max_packet

@@ -1,5 +1,5 @@
-# The transport's packets in a store (acomm.transport.store.Store on a file, or the
-# MemoryStore here), and the store's overflow rule.
+# The transport's packets in a store (acomm.transport.store.Store on a file, or
+# acomm.transport.memorystore.MemoryStore in RAM), and the store's overflow rule.
 #
 # A packet is one or more records. Chunk 0 holds the header and the start
 # of the body; chunks 1..n-1 the rest, each at most the store's max_record.
@@ -48,39 +48,6 @@ _F_MEDIUM = const(2)
 # The same for the delivered pairs (at their most), so that a full store
 # still remembers what it delivered.
 _META_ROOM = const(2 * (_REC_OVERHEAD + 2) + 2 * (_REC_OVERHEAD + 3 * DONE_MEMORY))
-
-
-class MemoryStore:
-    # The store's interface in RAM (tests, nodes without storage); a
-    # capacity makes it apply the same limit as a file store.
-    def __init__(self, capacity_bytes=None, max_record=65535):
-        self._d = {}
-        self.capacity_bytes = capacity_bytes
-        self.max_record = max_record
-        self.live_bytes = 0
-
-    def put(self, key, data):
-        old = self._d.get(key)
-        grow = len(data) + _REC_OVERHEAD - (0 if old is None else len(old) + _REC_OVERHEAD)
-        if self.capacity_bytes is not None and self.live_bytes + grow > self.capacity_bytes:
-            raise StoreFull("store full")
-        self._d[key] = bytes(data)
-        self.live_bytes += grow
-
-    def delete(self, key):
-        old = self._d.pop(key, None)
-        if old is not None:
-            self.live_bytes -= len(old) + _REC_OVERHEAD
-
-    def get(self, key):
-        return self._d.get(key)
-
-    def length(self, key):
-        d = self._d.get(key)
-        return None if d is None else len(d)
-
-    def keys(self):
-        return list(self._d)
 
 
 class Stored:

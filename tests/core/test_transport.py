@@ -8,7 +8,8 @@ from acomm.transport.arq import Outgoing, Reassembly
 from acomm.errors import DecodeError
 from acomm.events import DELIVERED, EXPIRED, QUEUED, TRANSMITTED
 from acomm.prng import Prng
-from acomm.transport import MemoryStore, Transport
+from acomm.transport import Transport
+from acomm.transport.memorystore import MemoryStore
 from acomm_sim.world import World
 from checks import raises
 from transportnet import net, packets, statuses

@@ -7,7 +7,8 @@ from acomm.transport import segment as sg
 from acomm.transport.arq import Outgoing
 from acomm.errors import StoreFull
 from acomm.events import DELIVERED, EXPIRED, FAILED, QUEUED, TRANSMITTED
-from acomm.transport.packetstore import MemoryStore, PacketStore
+from acomm.transport.memorystore import MemoryStore
+from acomm.transport.packetstore import PacketStore
 from acomm.prng import Prng
 from acomm.transport.store import Store
 from acomm.transport import Transport

@@ -14,7 +14,6 @@
 
 from acomm.drivers.registry import driver_class, modem
 from acomm.node import Node
-from acomm.transport.packetstore import MemoryStore
 from acomm.transport import Transport
 
 from .boardconfig import ConfigError
@@ -44,7 +43,8 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         opts["medium"] = lk["medium"]
         node.add_link(lk["name"], drv, open_uart(lk), **opts)
     st = cfg["storage"]
-    store = open_store(st) if st is not None and open_store is not None else MemoryStore()
+    # no store: the transport keeps its packets in RAM (a MemoryStore)
+    store = open_store(st) if st is not None and open_store is not None else None
     transport = Transport.of(node, store=store, routes=cfg["routes"], wall=wall, max_packet=cfg["max_packet"])
     station = None
     sc = cfg["station"]
