@@ -58,7 +58,7 @@ _X_FLAGS = const(0x80)
 
 
 class Frame:
-    __slots__ = ("ftype", "src", "dst", "seq", "flags", "payload", "authed")
+    # fields: ftype, src, dst, seq, flags, payload, authed
 
     def __init__(self, ftype, src, dst, seq, payload=b"", flags=0):
         self.authed = False  # set by the link when its tag verified (acomm.frame.auth)

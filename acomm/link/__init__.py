@@ -79,7 +79,7 @@ class _Inflight:
     # canceled: the request already has its final status (canceled, or
     # acknowledged before the driver reported the end of transmission); the
     # slot stays busy until the driver is done with the frame.
-    __slots__ = ("req", "handle", "state", "seq", "dst_id", "canceled", "kind")
+    # fields: req, handle, state, seq, dst_id, canceled, kind
 
     def __init__(self):
         self.clear()

@@ -170,7 +170,7 @@ def _heap_remove(h, i, ref):
 class TxRequest:
     # One frame transmission request (DUNE's frame transmission request plus
     # a CADDY class). The queue fills in enq and seq; meta is the link's.
-    __slots__ = ("req_id", "dst", "priority", "deadline", "data", "enq", "seq", "meta")
+    # fields: req_id, dst, priority, deadline, data, enq, seq, meta
 
     def __init__(self, req_id, dst, priority, deadline, data=b"", meta=None):
         if not 0 <= req_id <= 0xFFFF:

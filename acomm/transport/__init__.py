@@ -74,7 +74,8 @@ _FULL_WAIT_MS = const(60000)  # a relay that was full is asked again after this
 
 class _Room:
     # what the store's overflow rule needs to judge a packet not yet whole
-    __slots__ = ("size", "prio", "medium")
+    # fields: size, prio, medium
+    pass
 
 
 class _Packet:

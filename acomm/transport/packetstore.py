@@ -54,8 +54,8 @@ class Stored:
     # what recover() gives back for each packet
     # body is None: the transport reads it back (blob()) when it sends the packet
     # at: where the body starts in chunk 0
-    __slots__ = ("origin", "final", "pid", "prio", "expiry", "compressed", "medium", "body", "chunks", "size", "key",
-                 "at")
+    # fields: origin, final, pid, prio, expiry, compressed, medium, body, chunks, size, key, at
+    pass
 
 
 class StoredBlob:
@@ -65,7 +65,7 @@ class StoredBlob:
     # then holds a record or two at a time, not the body joined from its
     # records and copied again behind the header: three allocations of the
     # packet's size, its largest, made when its heap is fragmented.
-    __slots__ = ("head", "store", "key", "at", "chunk", "size")
+    # fields: head, store, key, at, chunk, size
 
     def __len__(self):
         return len(self.head) + self.size

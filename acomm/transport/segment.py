@@ -103,7 +103,8 @@ class Segment:
     # A decoded segment: is_sack; lane, gen; for fragments poll, index (mod
     # 256) and payload; for SACKs complete, base (mod 256), bitmap, pid
     # (complete) or reason (refused).
-    __slots__ = ("is_sack", "lane", "gen", "poll", "index", "payload", "complete", "base", "bitmap", "pid", "reason")
+    # fields: is_sack, lane, gen, poll, index, payload, complete, base, bitmap, pid, reason
+    pass
 
 
 def decode(head, data):
@@ -169,7 +170,8 @@ def packet_header(pid, length, compressed=False, relay=None):
 
 
 class PacketHeader:
-    __slots__ = ("pid", "length", "compressed", "relay", "size")
+    # fields: pid, length, compressed, relay, size
+    pass
 
 
 def decode_packet_header(data):
