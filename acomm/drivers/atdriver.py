@@ -25,8 +25,16 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
-from .atcommand import R_OK, R_TIMEOUT, AtChannel
-from .base import S_CONFIG, S_START, S_UP, SlotBase, SlotDriver
+from .atcommand import AtChannel
+from .base import SlotBase, SlotDriver
+
+# these modules' codes, as private constants (inlined: no slot in this
+# module's dict on a board); tests/cpython/test_const_copies.py checks them
+_R_OK = const(0)  # acomm.drivers.atcommand
+_R_TIMEOUT = const(3)  # acomm.drivers.atcommand
+_S_CONFIG = const(1)  # acomm.drivers.base
+_S_START = const(0)  # acomm.drivers.base
+_S_UP = const(2)  # acomm.drivers.base
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -98,9 +106,9 @@ class AtDriver(SlotDriver):
     def _pump(self, now):
         # the next command, once the line is free
         at = self.at
-        if self._state == S_START or at.busy(now):
+        if self._state == _S_START or at.busy(now):
             return
-        if self._state == S_CONFIG:
+        if self._state == _S_CONFIG:
             if self._wait is not None:
                 if ticks_diff(now, self._wait) < 0:
                     return
@@ -119,7 +127,7 @@ class AtDriver(SlotDriver):
 
     def stuck_reason(self):
         # why a request is still waiting for the modem
-        if self._state != S_UP:
+        if self._state != _S_UP:
             return "modem not answering"
         if not self.signal_ok:
             return "no signal"
@@ -141,8 +149,8 @@ class AtDriver(SlotDriver):
 
     def _config_result(self, now, code, line):
         text, want, _ = self.steps[self._step]
-        if code != R_OK or (want is not None and not self._step_seen):
-            what = "no reply" if code == R_TIMEOUT else (line.decode() if code != R_OK else "no %s" % want.decode())
+        if code != _R_OK or (want is not None and not self._step_seen):
+            what = "no reply" if code == _R_TIMEOUT else (line.decode() if code != _R_OK else "no %s" % want.decode())
             self._config_failed(now, "%s: %s" % (text.decode(), what))
             return
         if text.startswith(b"ATE0"):
@@ -172,7 +180,7 @@ class AtDriver(SlotDriver):
         if ok != self.signal_ok:
             self.signal_ok = ok
             self.caps.bitrate = self._bitrate if ok else 0
-            if self._state == S_UP:
+            if self._state == _S_UP:
                 self._say_signal(now)
 
     def _say_signal(self, now):
@@ -186,7 +194,7 @@ class AtDriver(SlotDriver):
     # -- answers from the AT channel (its sink) ----------------------------------------
     def on_result(self, tag, code, line):
         now = self._now
-        if code == R_TIMEOUT:
+        if code == _R_TIMEOUT:
             self._silent += 1
         else:
             self._silent = 0
@@ -195,7 +203,7 @@ class AtDriver(SlotDriver):
             return
         if tag != _T_CSQ:
             self._result(now, tag, code, line)
-        if self._silent >= self.down_after and self._state == S_UP:
+        if self._silent >= self.down_after and self._state == _S_UP:
             self.lost(now, "modem not answering")
 
     def on_info(self, tag, line):
@@ -225,7 +233,7 @@ class AtDriver(SlotDriver):
         self._block(self._now, tag, buf, n)
 
     def on_urc(self, line):
-        if self._state == S_UP:
+        if self._state == _S_UP:
             self._urc(self._now, line)
 
     def on_echo(self):
@@ -244,7 +252,7 @@ class AtDriver(SlotDriver):
         for m in self.banner_marks:
             if line.startswith(m):
                 self.stats["reboots"] += 1
-                if self._state != S_START:
+                if self._state != _S_START:
                     self.lost(self._now, "modem rebooted")
                 return True
         return False
@@ -256,7 +264,7 @@ class AtDriver(SlotDriver):
         self._went_down(reason)
         self.at.reset()
         self._silent = 0
-        self._state = S_CONFIG
+        self._state = _S_CONFIG
         self.start(now)
         self._lost(now, reason)
 

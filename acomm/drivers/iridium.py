@@ -32,9 +32,15 @@ from .caps import Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, EncodeError
 from . import iridium_wire as w
-from .atcommand import R_END, R_OK, R_TIMEOUT
 from .atdriver import AtDriver
-from .base import IDLE, QUEUED
+
+# these modules' codes, as private constants (inlined: no slot in this
+# module's dict on a board); tests/cpython/test_const_copies.py checks them
+_R_END = const(2)  # acomm.drivers.atcommand
+_R_OK = const(0)  # acomm.drivers.atcommand
+_R_TIMEOUT = const(3)  # acomm.drivers.atcommand
+_IDLE = const(0)  # acomm.drivers.base
+_QUEUED = const(1)  # acomm.drivers.base
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -180,7 +186,7 @@ class IridiumDriver(AtDriver):
     # -- what to do next -------------------------------------------------------------
     def _tick(self, now):
         s = self.slot
-        if (s.state == QUEUED or s.state == _LOADED) and ticks_diff(now, self._first_at) >= self.give_up_ms:
+        if (s.state == _QUEUED or s.state == _LOADED) and ticks_diff(now, self._first_at) >= self.give_up_ms:
             why = self.stuck_reason() or self.last_failure or "no session"
             self._fail("%s (gave up after %d sessions)" % (why, self._sessions))
 
@@ -195,11 +201,11 @@ class IridiumDriver(AtDriver):
             self._rb_good = False
             at.command(now, b"AT+SBDRB", _T_RB, self.cmd_timeout_ms, block=True)
             return True
-        if self._mo_loaded and s.state == IDLE:
+        if self._mo_loaded and s.state == _IDLE:
             self._status = None
             at.command(now, b"AT+SBDD0", _T_DD, self.cmd_timeout_ms)
             return True
-        if s.state == QUEUED:
+        if s.state == _QUEUED:
             s.state = _WRITING
             self._status = None
             at.command(now, b"AT+SBDWB=%d" % (len(self.mo_prefix) + s.n), _T_WB, self.cmd_timeout_ms,
@@ -213,7 +219,7 @@ class IridiumDriver(AtDriver):
                 self._session(now)
                 return True
             return False
-        if s.state != IDLE or (self._idle_at is not None and ticks_diff(now, self._idle_at) < 0):
+        if s.state != _IDLE or (self._idle_at is not None and ticks_diff(now, self._idle_at) < 0):
             return False
         mailbox = self.mailbox_check_ms and ticks_diff(now, self._mailbox_at) >= 0
         if self._ring or self._mt_waiting > 0 or mailbox:
@@ -265,13 +271,13 @@ class IridiumDriver(AtDriver):
             self._written(now, code, line)
         elif tag == _T_IX:
             self._in_session = False
-            if code == R_OK and self._ix is not None:
+            if code == _R_OK and self._ix is not None:
                 self._session_done(now, self._ix, None)
             else:
-                why = "no reply" if code == R_TIMEOUT else (line.decode() if code != R_OK else "no +SBDIX report")
+                why = "no reply" if code == _R_TIMEOUT else (line.decode() if code != _R_OK else "no +SBDIX report")
                 self._session_done(now, None, "SBDIX: " + why)
         elif tag == _T_RB:
-            if code == R_OK and self._rb_good:
+            if code == _R_OK and self._rb_good:
                 self._mt_unread = False
             else:
                 self._rb_fails += 1
@@ -279,7 +285,7 @@ class IridiumDriver(AtDriver):
                     self.stats["mt_lost"] += 1
                     self._mt_unread = False
         elif tag == _T_DD:
-            if code == R_OK and self._status == 0:
+            if code == _R_OK and self._status == 0:
                 self._mo_loaded = False
                 self._dd_fails = 0
             else:
@@ -296,33 +302,33 @@ class IridiumDriver(AtDriver):
         if s.state != _WRITING:
             return
         st = self._status
-        if code == R_OK and st == 0:
+        if code == _R_OK and st == 0:
             s.state = _LOADED
             self._mo_loaded = True
             self._next_at = now
             return
         self._mo_loaded = True  # part of it may be there
-        if code == R_END:
+        if code == _R_END:
             why = "SBDWB status 1: the modem timed out waiting for the data"
-        elif code == R_OK and st == 2:
+        elif code == _R_OK and st == 2:
             why = "SBDWB status 2: checksum mismatch"
-        elif code == R_OK and st == 3:
+        elif code == _R_OK and st == 3:
             self._fail("SBDWB status 3: bad message size")
             return
-        elif code == R_TIMEOUT:
+        elif code == _R_TIMEOUT:
             # a silent modem: written again when it answers (down_after
             # silences restart it); give_up_ms bounds the wait
             self.last_failure = "SBDWB: no reply"
-            s.state = QUEUED
+            s.state = _QUEUED
             return
         else:
-            why = "SBDWB: %s" % (line.decode() if code != R_OK else "no status")
+            why = "SBDWB: %s" % (line.decode() if code != _R_OK else "no status")
         self.last_failure = why
         self._wb_fails += 1
         if self._wb_fails >= self.wb_tries:
             self._fail(why)
         else:
-            s.state = QUEUED
+            s.state = _QUEUED
 
     def _session_done(self, now, r, why):
         s = self.slot
@@ -339,7 +345,7 @@ class IridiumDriver(AtDriver):
                 self._idle_wait = 0
                 self._idle_at = None
                 if mo_session:
-                    s.state = IDLE
+                    s.state = _IDLE
                     self.stats["mo_sent"] += 1
                     self._events.append((_EV_TX_DONE, s.handle))
                 return
@@ -365,7 +371,7 @@ class IridiumDriver(AtDriver):
 
     def _fail(self, why):
         s = self.slot
-        s.state = IDLE
+        s.state = _IDLE
         self.stats["mo_failed"] += 1
         self._events.append((_EV_TX_FAILED, s.handle, why))
 
@@ -384,7 +390,7 @@ class IridiumDriver(AtDriver):
         # time still runs).
         s = self.slot
         if s.state == _WRITING or s.state == _LOADED or s.state == _SESSION:
-            s.state = QUEUED
+            s.state = _QUEUED
             self._mo_loaded = True
         self._in_session = False
         self._mailbox_at = None

@@ -16,12 +16,26 @@
 # automatic reply to a DAT request: an interrogated node answers with data
 # without a transmission of its own (seed 003 section 6).
 
-from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from .caps import Capabilities
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
 from . import seatrac_wire as w
-from .seatrac_sequences import CMD, IDLE, K_DAT, K_PING, QUEUED, REQ_TYPES, AcousticSlot, SeatracConfig
-from .base import S_CONFIG, S_UP, AcousticDriver
+from .seatrac_sequences import REQ_TYPES, AcousticSlot, SeatracConfig
+from .base import AcousticDriver
+
+# these modules' codes, as private constants (inlined: no slot in this
+# module's dict on a board); tests/cpython/test_const_copies.py checks them
+_CAP_ADDRESSING = const(1)  # acomm.drivers.caps
+_CAP_BROADCAST = const(4)  # acomm.drivers.caps
+_CAP_RANGING = const(16)  # acomm.drivers.caps
+_CAP_RELIABLE = const(2)  # acomm.drivers.caps
+_CMD = const(2)  # acomm.drivers.seatrac_sequences
+_K_DAT = const(0)  # acomm.drivers.seatrac_sequences
+_K_PING = const(1)  # acomm.drivers.seatrac_sequences
+_IDLE = const(0)  # acomm.drivers.base
+_QUEUED = const(1)  # acomm.drivers.base
+_S_CONFIG = const(1)  # acomm.drivers.base
+_S_UP = const(2)  # acomm.drivers.base
 
 # seatrac_codes' numbers, as private constants (inlined: no RAM on a board)
 _BEACON_ALL = const(0)
@@ -130,7 +144,7 @@ class SeatracDriver(AcousticDriver):
             mtu_rx=mtu,
             bitrate=8000 // byte_ms,
             latency_ms=2 * packet_ms + turnaround_ms + byte_ms * mtu,
-            flags=CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING,
+            flags=_CAP_ADDRESSING | _CAP_BROADCAST | _CAP_RELIABLE | _CAP_RANGING,
         )
         self.broadcast_addr = _BEACON_ALL
         self.config = SeatracConfig(self, beacon_id, set_beacon_id, settings_len, id_offset, retry_ms, reboot_wait_ms)
@@ -188,7 +202,7 @@ class SeatracDriver(AcousticDriver):
             mtype = self.oway_type  # broadcasts are one-way only
         else:
             mtype = self.ack_type if ack else self.oway_type
-        return self._accept(now, K_DAT, addr, mtype, data)
+        return self._accept(now, _K_DAT, addr, mtype, data)
 
     def ping(self, now, addr):
         """A PING_SEND to beacon addr: EV_RANGE with the USBL fix. Never raises (the link calls it unguarded)."""
@@ -196,7 +210,7 @@ class SeatracDriver(AcousticDriver):
             return self._refuse("cannot ping beacon id %r" % (addr,))
         if not self.ready(now):
             return self._refuse("SeaTrac not ready")
-        return self._accept(now, K_PING, addr, self.ping_type, b"")
+        return self._accept(now, _K_PING, addr, self.ping_type, b"")
 
     def queue_reply(self, now, data, dest=_BEACON_ALL):
         # The packet for the beacon's next automatic reply to a DAT request
@@ -240,7 +254,7 @@ class SeatracDriver(AcousticDriver):
                 m[3 : 3 + len(q[1])] = q[1]
                 self.command(now, _CID_DAT_QUEUE_SET, 3 + len(q[1]))
             return
-        if self.slot.state == QUEUED and not self._held(now):
+        if self.slot.state == _QUEUED and not self._held(now):
             cid, n = self.slot.build(self._msg)
             self.command(now, cid, n)
             return
@@ -251,21 +265,21 @@ class SeatracDriver(AcousticDriver):
         # the command cid timed out
         if cid == _CID_DAT_QUEUE_SET or cid == _CID_DAT_QUEUE_CLR:
             self._q_dirty = True  # write it again once the beacon answers
-        if self._state == S_CONFIG:
+        if self._state == _S_CONFIG:
             self.config.failed(now, "no response to command 0x%02X" % cid)
             return
         slot = self.slot
-        if slot.state == CMD:
+        if slot.state == _CMD:
             # The command may have been carried out and only its answer
             # lost: hold the next one until the beacon would be idle again.
             self._hold_until = ticks_add(now, slot.busy_ms())
-            slot.fail("no response to %s" % ("PING_SEND" if slot.kind == K_PING else "DAT_SEND"))
+            slot.fail("no response to %s" % ("PING_SEND" if slot.kind == _K_PING else "DAT_SEND"))
 
     # -- state changes -----------------------------------------------------
     def lost(self, now, reason):
         """The beacon rebooted or fell silent: whatever it was doing is gone; configure it again."""
         self._went_down(reason)
-        if self.slot.state != IDLE:
+        if self.slot.state != _IDLE:
             self.slot.fail(reason)
         self.queued_reply = None  # the beacon's RAM is gone: queue it again
         self._q_dirty = self._q_want is not None and self._q_want[1] is not None
@@ -279,7 +293,7 @@ class SeatracDriver(AcousticDriver):
         elapsed = ticks_diff(now, self._up_at)
         self._up_s = secs
         self._up_at = now
-        if prev is None or expected_reboot or self._state != S_UP:
+        if prev is None or expected_reboot or self._state != _S_UP:
             return False
         if secs * 1000 + 2000 + elapsed // 100 < prev * 1000 + elapsed:
             self.stats["reboots"] += 1
@@ -294,7 +308,7 @@ class SeatracDriver(AcousticDriver):
     def on_junk(self, kind):
         # Text outside messages is what a rebooting beacon prints: ask it
         # how long it has been up. Damaged lines are only counted.
-        if kind == _JUNK_TEXT and self._state == S_UP:
+        if kind == _JUNK_TEXT and self._state == _S_UP:
             self._probe = True
 
     def on_message(self, b, n):
@@ -303,10 +317,10 @@ class SeatracDriver(AcousticDriver):
         self._heard_from(now)
         if cid == self._cmd:
             self._cmd = 0
-            if self._state == S_CONFIG:
+            if self._state == _S_CONFIG:
                 self.config.response(now, b, n)
             elif cid == _CID_DAT_SEND or cid == _CID_PING_SEND:
-                if self.slot.state == CMD and n >= 2:
+                if self.slot.state == _CMD and n >= 2:
                     hold = self.slot.command_status(now, b[1])
                     if hold is not None:
                         self._hold_until = hold
@@ -325,9 +339,9 @@ class SeatracDriver(AcousticDriver):
         if cid == _CID_DAT_RECEIVE:
             self._dat_receive(now, b, n)
         elif cid == _CID_DAT_ERROR or cid == _CID_PING_ERROR:
-            kind = K_DAT if cid == _CID_DAT_ERROR else K_PING
+            kind = _K_DAT if cid == _CID_DAT_ERROR else _K_PING
             if n >= 3 and self.slot.awaiting(kind, b[2]):
-                if kind == K_PING:
+                if kind == _K_PING:
                     self.slot.ranged(None, None, {"status": w.status_name(b[1])})
                 else:
                     self.slot.dat_error(b[1])
@@ -373,7 +387,7 @@ class SeatracDriver(AcousticDriver):
         src = b[2]
         own = self.config.own_id
         if ack:
-            if self.slot.awaiting(K_DAT, src) and (own is None or dest == own):
+            if self.slot.awaiting(_K_DAT, src) and (own is None or dest == own):
                 if b[3] & _FIX_RANGE:
                     self.last_fix = w.fix_dict(b, 1)
                 self.slot.delivered()
@@ -398,7 +412,7 @@ class SeatracDriver(AcousticDriver):
             self.stats["malformed"] += 1
             return
         src = b[2]
-        if not self.slot.awaiting(K_PING, src):
+        if not self.slot.awaiting(_K_PING, src):
             self.stats["stale"] += 1
             return
         fix = w.fix_dict(b, 1)

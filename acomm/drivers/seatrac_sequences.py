@@ -30,7 +30,12 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from . import seatrac_wire as w
-from .base import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
+from .base import ConfigSequence, SlotBase
+
+# these modules' codes, as private constants (inlined: no slot in this
+# module's dict on a board); tests/cpython/test_const_copies.py checks them
+_IDLE = const(0)  # acomm.drivers.base
+_QUEUED = const(1)  # acomm.drivers.base
 
 # seatrac_codes' numbers, as private constants (inlined: no RAM on a board)
 _CID_DAT_SEND = const(0x60)
@@ -254,7 +259,7 @@ class AcousticSlot(SlotBase):
         if self.done_at is not None and ticks_diff(now, self.done_at) >= 0:
             self.tx_done()
             if self.deadline is None:
-                self.state = IDLE  # one-way: nothing more will come
+                self.state = _IDLE  # one-way: nothing more will come
                 return False
         if self.deadline is not None and ticks_diff(now, self.deadline) >= 0:
             self.fail("no reply from the modem")
@@ -270,13 +275,13 @@ class AcousticSlot(SlotBase):
             self.d._events.append((_EV_TX_DONE, self.handle))
 
     def fail(self, reason):
-        self.state = IDLE
+        self.state = _IDLE
         self.done_at = None
         self.d._events.append((_EV_TX_FAILED, self.handle, reason))
 
     def delivered(self):
         self.tx_done()
-        self.state = IDLE
+        self.state = _IDLE
         self.d._events.append((_EV_DELIVERED, self.handle))
 
     def dat_error(self, status):
@@ -284,5 +289,5 @@ class AcousticSlot(SlotBase):
         self.fail(w.status_name(status))
 
     def ranged(self, src, metres, fix):
-        self.state = IDLE
+        self.state = _IDLE
         self.d._events.append((_EV_RANGE, self.handle, src if metres is not None else None, metres, fix))

@@ -20,7 +20,6 @@
 # at once. Events go to `listener(event_tuple)` (see acomm.events).
 
 from .. import frame as fr
-from ..drivers.caps import CAP_ADDRESSING, CAP_DISCOVERY, CAP_RANGING, CAP_RELIABLE
 from ..compat import const, ticks_add, ticks_diff
 from .acktable import AckTable
 from .dedup import DuplicateFilter
@@ -28,7 +27,15 @@ from .framing import LinkFraming
 from .discovery import Discovery, decode_advert, encode_advert
 from ..errors import AcommError, DecodeError
 from .names import AddressMap
-from .txqueue import MAX_LIFESPAN_MS, TxQueue, TxRequest
+from .txqueue import TxQueue, TxRequest
+
+# these modules' codes, as private constants (inlined: no slot in this
+# module's dict on a board); tests/cpython/test_const_copies.py checks them
+_CAP_ADDRESSING = const(1)  # acomm.drivers.caps
+_CAP_DISCOVERY = const(8)  # acomm.drivers.caps
+_CAP_RANGING = const(16)  # acomm.drivers.caps
+_CAP_RELIABLE = const(2)  # acomm.drivers.caps
+_MAX_LIFESPAN_MS = const(0x10000000)  # acomm.link.txqueue
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -130,10 +137,10 @@ class Link:
         self.queue = TxQueue(queue_capacity, aging_ms)
         self.discovery = Discovery(advert_period_ms, lost_after, seed=node_id * 7919 + 1)
         self.addr_map = addr_map if addr_map is not None else AddressMap(True, driver.broadcast_addr)
-        self.elided = driver.caps.has(CAP_ADDRESSING)
+        self.elided = driver.caps.has(_CAP_ADDRESSING)
         # who confirms delivery: the modem (its own acks, on elided links
         # of reliable modems) or this link (acomm ACK frames)
-        self.modem_acks = self.elided and driver.caps.has(CAP_RELIABLE)
+        self.modem_acks = self.elided and driver.caps.has(_CAP_RELIABLE)
         self.framing = LinkFraming(node_id, self.elided, self.addr_map, driver.caps.mtu_tx, not self.modem_acks, fec)
         self.seq_mod = self.framing.seq_mod
         # acomm.link.guard.Guard when the node has a key (Node.set_auth)
@@ -176,7 +183,7 @@ class Link:
         ovh = self.framing.worst_overhead
         c.mtu_tx = max(c.mtu_tx - ovh, 0)
         c.mtu_rx = max(c.mtu_rx - ovh, 0)
-        c.flags |= CAP_DISCOVERY | CAP_RELIABLE
+        c.flags |= _CAP_DISCOVERY | _CAP_RELIABLE
         return c
 
     def advertise_caps(self):
@@ -249,8 +256,8 @@ class Link:
         life_ms = int(lifespan_s * 1000)
         if life_ms <= 0:
             return self._refuse(req_id, "lifespan must be positive")
-        if life_ms > MAX_LIFESPAN_MS:
-            return self._refuse(req_id, "lifespan longer than %d s" % (MAX_LIFESPAN_MS // 1000))
+        if life_ms > _MAX_LIFESPAN_MS:
+            return self._refuse(req_id, "lifespan longer than %d s" % (_MAX_LIFESPAN_MS // 1000))
         try:
             dst_id = self._resolve(dst)
         except AcommError as e:
@@ -612,13 +619,13 @@ class Link:
         """Pings each node named in turn (names: a list), within lifespan_s seconds -> True when
         accepted. Then one EV_RANGE_RECEIVED (names, metres: None where none answered) and a final
         status: `delivered` with at least one range, else `failed`; refusals as for request()."""
-        if not self.driver.caps.has(CAP_RANGING):
+        if not self.driver.caps.has(_CAP_RANGING):
             return self._refuse(req_id, "%s cannot measure range" % self.name)
         if req_id in self._active:
             return self._refuse(req_id, "request id %d is already in use" % req_id)
         life_ms = int(lifespan_s * 1000)
-        if life_ms <= 0 or life_ms > MAX_LIFESPAN_MS:
-            return self._refuse(req_id, "lifespan must be positive and below %d s" % (MAX_LIFESPAN_MS // 1000))
+        if life_ms <= 0 or life_ms > _MAX_LIFESPAN_MS:
+            return self._refuse(req_id, "lifespan must be positive and below %d s" % (_MAX_LIFESPAN_MS // 1000))
         if not names:
             return self._refuse(req_id, "no node to range")
         ids = []

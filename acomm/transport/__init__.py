@@ -49,9 +49,13 @@ from . import segment as sg
 from .arq import Outgoing, Reassembly
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, StoreFull
-from ..frame import SEGMENT
-from .packetstore import DONE_MEMORY, PacketStore
+from .packetstore import PacketStore
 from .route import MEDIUM_ALL, Router
+
+# these modules' codes, as private constants (inlined: no slot in this
+# module's dict on a board); tests/cpython/test_const_copies.py checks them
+_SEGMENT = const(5)  # acomm.frame
+_DONE_MEMORY = const(32)  # acomm.transport.packetstore
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -233,7 +237,7 @@ class Transport:
             p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, None, s.compressed, s.medium)
             p.chunks, p.size = s.chunks, s.size
             self._queue(p)
-        self._done = self.packets.done[-DONE_MEMORY:]
+        self._done = self.packets.done[-_DONE_MEMORY:]
 
     # -- statuses --------------------------------------------------------------------
     def _status(self, p, status, reason):
@@ -382,7 +386,7 @@ class Transport:
         life = p.expiry - self.wall()
         if life < 1:
             life = 1
-        if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, ftype=SEGMENT, seq=head):
+        if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, ftype=_SEGMENT, seq=head):
             poll = sg.is_poll(head)
             self._reqs[rid] = (p, index, poll)
             p.inflight += 1
@@ -634,7 +638,7 @@ class Transport:
 
     def _remember(self, origin, pid, save=True):
         self._done.append((origin, pid))
-        if len(self._done) > DONE_MEMORY:
+        if len(self._done) > _DONE_MEMORY:
             self._done.pop(0)
         if save:
             self._save_done()
@@ -650,7 +654,7 @@ class Transport:
         if self._quiet and not tries:
             return
         rid = self._next_id()
-        if link.request(now, rid, self.names.name_of(src), seg[1], _SACK_LIFESPAN_S, _SACK_PRIORITY, ftype=SEGMENT,
+        if link.request(now, rid, self.names.name_of(src), seg[1], _SACK_LIFESPAN_S, _SACK_PRIORITY, ftype=_SEGMENT,
                         seq=seg[0]):
             self._sacks[rid] = (link, src, seg, tries)
 
