@@ -7,7 +7,7 @@
 # payloads (raw acomm frames on links without addressing or integrity, the
 # one-byte elided header on modems that have both), acknowledges frames on
 # raw links, suppresses duplicates, and runs node discovery. The ranging job
-# is at the end of the class. set_reply() leaves a frame in a modem that
+# is in acomm.link.ranging, loaded by the first range(). set_reply() leaves a frame in a modem that
 # answers interrogations by itself; overhear=True hands up DATA frames
 # addressed to other nodes (passive listening), never acknowledging them.
 #
@@ -33,7 +33,6 @@ from .txqueue import TxQueue, TxRequest
 # module's dict on a board); tests/cpython/test_const_copies.py checks them
 _CAP_ADDRESSING = const(1)  # acomm.drivers.caps
 _CAP_DISCOVERY = const(8)  # acomm.drivers.caps
-_CAP_RANGING = const(16)  # acomm.drivers.caps
 _CAP_RELIABLE = const(2)  # acomm.drivers.caps
 _MAX_LIFESPAN_MS = const(0x10000000)  # acomm.link.txqueue
 
@@ -54,7 +53,6 @@ _RANGE_METRES = const(3)
 _RX_DATA = const(3)
 _RX_DST = const(2)
 _RX_SRC = const(1)
-_EV_RANGE_RECEIVED = const(24)
 _EV_RECEIVED = const(21)
 _EV_REFUSED = const(28)
 _EV_SEGMENT = const(25)
@@ -344,10 +342,12 @@ class Link:
             self._final(req, _EXPIRED, "lifespan ended in the queue")
         if fl.state == _IDLE and fl.kind == _K_PING and fl.req is not None:
             # a ranging job between two pings
+            from .ranging import finish, ping_next
+
             if ticks_diff(now, fl.req.deadline) >= 0:
-                self._finish_range(fl.req)
+                finish(self, fl.req)
             elif d.ready(now):
-                self._ping_next(now)
+                ping_next(self, now)
                 self._handle_driver_events(now)
         elif fl.state == _IDLE and d.ready(now):
             self._start_next(now)
@@ -438,7 +438,9 @@ class Link:
         fl.req = req
         fl.canceled = False
         if req.meta[0] == -2:
-            self._ping_next(now)
+            from .ranging import ping_next
+
+            ping_next(self, now)
             return
         want_ack = req.meta[0] >= 0
         # a retry keeps its sequence number so the receiver can drop the copy
@@ -479,7 +481,9 @@ class Link:
                 self._on_tx_failed(now, ev[_HANDLE], ev[_FAIL_REASON])
             elif code == _EV_RANGE:
                 if self._fl.kind == _K_PING and ev[_HANDLE] == self._fl.handle:
-                    self._range_result(now, ev[_RANGE_METRES])
+                    from .ranging import result
+
+                    result(self, now, ev[_RANGE_METRES])
             elif code == _EV_DRIVER_UP or code == _EV_DRIVER_DOWN:
                 self._check_caps_changed()
             elif code == _EV_REPLIED:
@@ -526,7 +530,9 @@ class Link:
                 self._retry_or_fail(req, now, reason)
             return
         if fl.kind == _K_PING:
-            self._range_result(now, None)
+            from .ranging import result
+
+            result(self, now, None)
             return
         req = fl.req
         kind = fl.kind
@@ -619,74 +625,6 @@ class Link:
         """Pings each node named in turn (names: a list), within lifespan_s seconds -> True when
         accepted. Then one EV_RANGE_RECEIVED (names, metres: None where none answered) and a final
         status: `delivered` with at least one range, else `failed`; refusals as for request()."""
-        if not self.driver.caps.has(_CAP_RANGING):
-            return self._refuse(req_id, "%s cannot measure range" % self.name)
-        if req_id in self._active:
-            return self._refuse(req_id, "request id %d is already in use" % req_id)
-        life_ms = int(lifespan_s * 1000)
-        if life_ms <= 0 or life_ms > _MAX_LIFESPAN_MS:
-            return self._refuse(req_id, "lifespan must be positive and below %d s" % (_MAX_LIFESPAN_MS // 1000))
-        if not names:
-            return self._refuse(req_id, "no node to range")
-        ids = []
-        for n in names:
-            try:
-                nid = self._resolve(n)
-            except AcommError as e:
-                return self._refuse(req_id, str(e))
-            if nid is None:
-                return self._refuse(req_id, "cannot range the broadcast address")
-            ids.append(nid)
-        req = TxRequest(req_id, None, priority, ticks_add(now, life_ms), b"")
-        # meta: [-2 marks ranging, (ids, results, next index)]
-        req.meta = [-2, (ids, [None] * len(ids), [0])]
-        return self._enqueue(req, now)
+        from .ranging import request
 
-    def _ping_next(self, now):
-        fl = self._fl
-        req = fl.req
-        ids, _, idx = req.meta[1]
-        nid = ids[idx[0]]
-        fl.kind = _K_PING
-        fl.state = _SENDING
-        if idx[0] == 0:
-            self._status(req.req_id, _TRANSMITTING)
-        self._last_tx = now
-        try:
-            fl.handle = self.driver.ping(now, self.addr_map.addr_of(nid))
-        except AcommError:
-            fl.handle = None
-            self._range_result(now, None)  # this node gets no range; go on
-
-    def _range_result(self, now, metres):
-        fl = self._fl
-        req = fl.req
-        ids, results, idx = req.meta[1]
-        results[idx[0]] = metres
-        idx[0] += 1
-        if fl.canceled:
-            fl.clear()
-            return
-        if idx[0] < len(ids) and ticks_diff(now, req.deadline) < 0:
-            # the job stays in the slot (_K_PING, state idle); poll() sends the
-            # next ping when the driver is ready
-            fl.state = _IDLE
-            if self.driver.ready(now):
-                self._ping_next(now)
-            return
-        self._finish_range(req)
-
-    def _finish_range(self, req):
-        ids, results, _ = req.meta[1]
-        self._fl.clear()
-        names = [self.names.name_of(i) for i in ids]
-        self._emit((_EV_RANGE_RECEIVED, self, req.req_id, names, results))
-        got = 0
-        for r in results:
-            if r is not None:
-                got += 1
-        if got:
-            self._final(req, _DELIVERED, "%d of %d ranges" % (got, len(ids)))
-        else:
-            self._final(req, _FAILED, "no range reply")
-
+        return request(self, now, req_id, names, lifespan_s, priority)

@@ -22,11 +22,11 @@ PRIVATE = re.compile(r"^_([A-Z][A-Z0-9_]*) = const\((.+?)\)", re.M)
 SCOPED = {
     "acomm.drivers.base": (("drivers/seatrac.py", "drivers/seatrac_sequences.py", "drivers/iridium.py",
                             "drivers/atdriver.py"), ("IDLE", "QUEUED", "S_START", "S_CONFIG", "S_UP")),
-    "acomm.drivers.caps": (("drivers/seatrac.py", "link/__init__.py"),
+    "acomm.drivers.caps": (("drivers/seatrac.py", "link/__init__.py", "link/ranging.py"),
                            ("CAP_ADDRESSING", "CAP_BROADCAST", "CAP_DISCOVERY", "CAP_RANGING", "CAP_RELIABLE")),
     "acomm.drivers.atcommand": (("drivers/iridium.py", "drivers/atdriver.py"), ("R_OK", "R_END", "R_TIMEOUT")),
     "acomm.drivers.seatrac_sequences": (("drivers/seatrac.py",), ("CMD", "K_DAT", "K_PING")),
-    "acomm.link.txqueue": (("link/__init__.py",), ("MAX_LIFESPAN_MS",)),
+    "acomm.link.txqueue": (("link/__init__.py", "link/ranging.py"), ("MAX_LIFESPAN_MS",)),
     "acomm.frame": (("transport/__init__.py",), ("SEGMENT",)),
     "acomm.transport.packetstore": (("transport/__init__.py",), ("DONE_MEMORY",)),
 }
@@ -87,6 +87,19 @@ def test_every_private_copy_of_a_lower_modules_code_is_its_value():
                         wrong.append("%s: _%s = %s, %s has %r" % (f, n, copies[n], modname, getattr(source, n)))
     assert not wrong, "\n".join(wrong)
     assert len(seen) >= 25  # the drivers', the link's and the transport's copies
+
+
+def test_the_ranging_jobs_copies_of_the_links_slot_constants_are_the_links():
+    # acomm.link.ranging works on the Link's transmission slot: its states
+    # and kinds are the Link's private constants (attributes on CPython)
+    import acomm.link as link
+
+    with open(os.path.join(ROOT, "link", "ranging.py")) as fh:
+        copies = dict(PRIVATE.findall(fh.read()))
+    mine = [n for n in copies if hasattr(link, "_" + n) and not hasattr(events, n)]
+    assert set(mine) >= {"IDLE", "SENDING", "K_PING"}
+    wrong = [n for n in mine if int(copies[n], 0) != getattr(link, "_" + n)]
+    assert not wrong, wrong
 
 
 def test_no_module_of_the_seatrac_driver_keeps_a_public_copy():

@@ -51,6 +51,7 @@ package(
         "link/framing.py",
         "link/guard.py",
         "link/names.py",
+        "link/ranging.py",
         "link/txqueue.py",
         "node.py",
         "prng.py",
