@@ -61,6 +61,19 @@ def test_dry_run_lists_the_board_and_only_its_drivers(capsys, board, want, not_w
 
 
 @pytest.mark.parametrize("board", ["buoy_pico", "diver_esp32s3"])
+def test_native_code_goes_to_the_frozen_manifest_and_not_to_the_flash(board):
+    # relocated into RAM from a filesystem or ROMFS, in place from flash
+    board_dir = os.path.join(BOARDS, board)
+    assert "acomm.codec._crc16_viper" in boardfiles.FROZEN_ONLY
+    assert "acomm.codec._crc16_viper" in boardfiles.modules(board_dir)
+    devices = [e.device for e in boardfiles.plan(board_dir, compile=False)]
+    assert "/lib/acomm/codec/crc.py" in devices
+    assert not any("_crc16_viper" in d for d in devices)
+    with open(os.path.join(ROOT, "ports", "micropython", "manifests", board + ".py")) as f:
+        assert "codec/_crc16_viper.py" in f.read()
+
+
+@pytest.mark.parametrize("board", ["buoy_pico", "diver_esp32s3"])
 def test_every_planned_module_exists_where_the_device_path_says(board):
     dirs = boardfiles.package_dirs()
     entries = boardfiles.plan(os.path.join(BOARDS, board), compile=False)
@@ -127,6 +140,9 @@ def test_x64_mpy_imports_on_the_unix_port(tmp_path, board):
             "from acomm.drivers.registry import driver_class\n"
             "for modem in %r:\n"
             "    driver_class(modem)\n"
+            # the viper CRC stays behind (FROZEN_ONLY): the table one runs
+            "from acomm.codec import crc\n"
+            "assert crc.crc16 is crc.crc16_pure and crc.crc16(b'123456789') == 0xBB3D\n"
             "print('IMPORTED')\n") % (drivers, sorted(set(d.rpartition(".")[2] for d in drivers)))
     env = dict(os.environ, MICROPYPATH=str(dev / "lib") + ":.frozen")
     r = subprocess.run([mp, "-c", code], cwd=str(tmp_path), env=env, capture_output=True, text=True, timeout=30)

@@ -257,9 +257,21 @@ def compile_mpy(src, dst, arch, source_name=None, mpy_cross=None):
 # --- the plan ------------------------------------------------------------------
 
 
+# Modules a frozen firmware carries (manifests) but `acomm flash` does not
+# copy: native code, which runs in place from flash when frozen but is
+# relocated into RAM when loaded from a filesystem or a ROMFS image. Their
+# importers fall back to plain Python without them.
+#   acomm.codec._crc16_viper  624 B of the buoy's heap from a ROMFS on the
+#                             Cortex-M3; acomm.codec.crc keeps its table CRC
+#                             (a frame of 30-340 bytes, at 80 bit/s to a few
+#                             kbit/s on the air: its speed is not the limit)
+FROZEN_ONLY = ("acomm.codec._crc16_viper",)
+
+
 def plan(board_dir, arch=None, compile=True, stage_dir=None, root=None):
     """Every file that goes to the device: [Entry(device path, host path, size in bytes), ...].
 
+    The board's modules but FROZEN_ONLY's.
     /main.py and /config.py first (source), then /lib/... sorted. With compile,
     the modules are compiled with mpy-cross -march=arch (default: the config's
     "arch") into stage_dir (default build/flash/<board>/<arch> in the repo),
@@ -267,6 +279,8 @@ def plan(board_dir, arch=None, compile=True, stage_dir=None, root=None):
     """
     cfg = load_config(board_dir)
     mods = modules(board_dir, cfg, root)
+    for name in FROZEN_ONLY:
+        mods.pop(name, None)
     out = [Entry("/" + f, os.path.join(board_dir, f), os.path.getsize(os.path.join(board_dir, f)))
            for f in ("main.py", "config.py")]
     out += [Entry(d, h, os.path.getsize(h)) for d, h in web_files(cfg)]
