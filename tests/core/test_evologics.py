@@ -126,11 +126,13 @@ def test_driver_start_sets_the_modem_up():
     c = d.caps
     assert (c.manufacturer, c.model, c.mtu_tx, c.bitrate) == ("EvoLogics", "S2C", 1024, 5000)
     assert c.flags == CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING
+    # burst data reports its delivery by itself; without burst (MTU 64) nothing does
+    assert c.report_min == 65
     assert d.broadcast_addr == 255 and d.config.zx and d.sound_speed == 1500
     d = up_driver(7)
     assert d.address == 7
     d = EvologicsDriver(burst_mtu=0, take_control=False, check_mode=False, extra_commands=(b"AT!L2",))
-    assert d.caps.mtu_tx == 64 and d.caps.bitrate == 976
+    assert d.caps.mtu_tx == 64 and d.caps.bitrate == 976 and d.caps.report_min == 0
     d.poll(0)
     assert d.take_output() == b"AT?AL\n"
     d.feed(1, b"3\r\n")
