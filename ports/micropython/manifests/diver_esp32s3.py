@@ -56,6 +56,7 @@ package(
         "prng.py",
         "transport/__init__.py",
         "transport/arq.py",
+        "transport/delivery.py",
         "transport/packetstore.py",
         "transport/route.py",
         "transport/segment.py",
