@@ -8,6 +8,12 @@ CAP_RELIABLE = const(2)  # it can confirm delivery of a frame
 CAP_BROADCAST = const(4)
 CAP_DISCOVERY = const(8)
 CAP_RANGING = const(16)
+# the modem reports by itself, at no extra air time, whether each frame of
+# more than half its MTU reached its addressee (EvoLogics burst data:
+# DELIVERED / FAILED): a link asked to confirm such a frame costs nothing
+# more, and the transport takes the report as an acknowledgement
+# (acomm.transport.delivery)
+CAP_DELIVERY = const(32)
 
 _FLAG_NAMES = (
     (CAP_ADDRESSING, "addressing"),
@@ -15,6 +21,7 @@ _FLAG_NAMES = (
     (CAP_BROADCAST, "broadcast"),
     (CAP_DISCOVERY, "discovery"),
     (CAP_RANGING, "ranging"),
+    (CAP_DELIVERY, "delivery"),
 )
 
 
@@ -32,7 +39,6 @@ class Capabilities:
         "bitrate",
         "latency_ms",
         "flags",
-        "report_min",
     )
 
     def __init__(
@@ -49,7 +55,6 @@ class Capabilities:
         bitrate=0,
         latency_ms=0,
         flags=0,
-        report_min=0,
     ):
         self.manufacturer = manufacturer
         self.model = model
@@ -63,12 +68,6 @@ class Capabilities:
         self.bitrate = bitrate  # average, bit/s
         self.latency_ms = latency_ms  # average one-way, for one frame
         self.flags = flags
-        # frames of at least this many bytes get a delivery report from the
-        # modem unasked and at no extra air time (EvoLogics burst data:
-        # DELIVERED / FAILED), so a link asked to confirm one costs nothing
-        # more; the transport takes it as an acknowledgement
-        # (acomm.transport.delivery). 0: the modem reports nothing by itself.
-        self.report_min = report_min
 
     def has(self, flag):
         return bool(self.flags & flag)

@@ -12,7 +12,7 @@
 # Notifications (RECV*, DELIVERED*, FAILED*, SEND*, ...) are told from
 # replies by their keyword, so they may arrive at any time.
 
-from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_DELIVERY, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
 from ..events import EV_DELIVERED, EV_RX, EV_TX_FAILED
@@ -92,6 +92,11 @@ class EvologicsDriver(AcousticDriver):
         self.rx_gap_ms = rx_gap_ms
         self.down_after = down_after
         mtu = burst_mtu if burst_mtu else w.IM_MAX
+        flags = CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING
+        if mtu > 2 * w.IM_MAX:
+            # a frame of more than half the MTU is burst data, which the
+            # modem always acknowledges itself and reports DELIVERED / FAILED
+            flags |= CAP_DELIVERY
         self.caps = Capabilities(
             manufacturer="EvoLogics",
             model="S2C",
@@ -99,10 +104,7 @@ class EvologicsDriver(AcousticDriver):
             mtu_rx=mtu,
             bitrate=burst_bitrate if burst_mtu else im_bitrate,
             latency_ms=self.airtime_ms(mtu, mtu > w.IM_MAX) + self.reply_window_ms(),
-            flags=CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING,
-            # burst data (over 64 bytes) is always acknowledged by the modem
-            # itself, which says DELIVERED or FAILED
-            report_min=w.IM_MAX + 1 if burst_mtu else 0,
+            flags=flags,
         )
         self.config = EvologicsConfig(self, address, take_control, check_mode, notifications, extra_commands, retry_ms)
         self.last_ptime_us = None  # propagation time after the latest delivered ack

@@ -62,6 +62,7 @@ _FAILED = const(8)
 _QUEUED = const(1)
 _TRANSMITTED = const(4)
 _WAITING = const(3)
+_CAP_DELIVERY = const(32)  # acomm.drivers.caps
 
 _EV_PACKET = const(27)
 _EV_REFUSED = const(28)
@@ -304,12 +305,11 @@ class Transport:
             return
         # a modem that reports delivery by itself acknowledges fragments
         # (acomm.transport.delivery: loaded only there, never on the buoy)
-        rmin = link.driver.caps.report_min if link.modem_acks else 0
         try:
-            if rmin:
+            if link.modem_acks and link.driver.caps.flags & _CAP_DELIVERY:
                 from .delivery import ReportedOutgoing
 
-                p.out = ReportedOutgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid, rmin)
+                p.out = ReportedOutgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
             else:
                 p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
         except ValueError as e:

@@ -1,7 +1,7 @@
 # The transport's implicit acknowledgement, on links whose modem reports by
-# itself whether a frame reached its addressee (the driver's caps.report_min:
-# an EvoLogics S2C acknowledges every burst, over 64 bytes, itself and says
-# DELIVERED or FAILED, at no extra air time).
+# itself whether a frame of more than half its MTU reached its addressee (the
+# driver's caps flag CAP_DELIVERY: an EvoLogics S2C acknowledges every burst
+# itself and says DELIVERED or FAILED, at no extra air time).
 #
 # The sender asks the link to confirm each fragment the modem reports on,
 # except the one that carries the poll, and takes the modem's DELIVERED as
@@ -34,22 +34,25 @@
 # on such a link: a board whose links report nothing (the buoy's SeaTrac and
 # Iridium) never loads it.
 
+from . import segment as sg
 from .arq import Outgoing
 
 
 class ReportedOutgoing(Outgoing):
-    """An Outgoing on a link whose modem reports the delivery of frames of at least report_min bytes."""
+    """An Outgoing on a link whose modem reports the delivery of frames of more than half its MTU."""
 
     reports = True
 
-    def __init__(self, blob, fragsize, lane, gen, pid, report_min):
+    def __init__(self, blob, fragsize, lane, gen, pid):
+        # segments of at least report_min bytes (index byte included) fill
+        # more than half the link's MTU: the modem reports them
+        self.report_min = (fragsize + sg.FRAG_HEADER) // 2 + 1
         n = len(blob)
         if fragsize > 0 and n > fragsize:
             # as many fragments as the MTU needs, all of one size
             count = (n + fragsize - 1) // fragsize
             fragsize = (n + count - 1) // count
         Outgoing.__init__(self, blob, fragsize, lane, gen, pid)
-        self.report_min = report_min
 
     def report_wanted(self, nbytes, poll):
         """True when a segment of nbytes (index byte included) is to be confirmed by the modem's report."""

@@ -2,7 +2,7 @@
 # exchange of ref/modem-protocols.md section 2.6, the line reader on binary
 # payloads, then two Nodes whose Links drive EvologicsDrivers over FakeUART
 # lines to emulated modems on one acoustic medium, through every fault mode.
-from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_DELIVERY, CAP_RANGING, CAP_RELIABLE
 from acomm.compat import TICKS_MAX
 from acomm.drivers import evologics_wire as w
 from acomm.drivers.evologics import EvologicsDriver
@@ -125,14 +125,14 @@ def test_driver_start_sets_the_modem_up():
     d = up_driver()
     c = d.caps
     assert (c.manufacturer, c.model, c.mtu_tx, c.bitrate) == ("EvoLogics", "S2C", 1024, 5000)
-    assert c.flags == CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING
     # burst data reports its delivery by itself; without burst (MTU 64) nothing does
-    assert c.report_min == 65
+    assert c.flags == CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING | CAP_DELIVERY
+    assert c.flag_names() == ["addressing", "reliable", "broadcast", "ranging", "delivery"]
     assert d.broadcast_addr == 255 and d.config.zx and d.sound_speed == 1500
     d = up_driver(7)
     assert d.address == 7
     d = EvologicsDriver(burst_mtu=0, take_control=False, check_mode=False, extra_commands=(b"AT!L2",))
-    assert d.caps.mtu_tx == 64 and d.caps.bitrate == 976 and d.caps.report_min == 0
+    assert d.caps.mtu_tx == 64 and d.caps.bitrate == 976 and not d.caps.has(CAP_DELIVERY)
     d.poll(0)
     assert d.take_output() == b"AT?AL\n"
     d.feed(1, b"3\r\n")

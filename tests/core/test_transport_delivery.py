@@ -16,13 +16,14 @@ from transportnet import QUIET, net, packets, statuses, wall_of
 
 def test_reported_fragments_are_equal_and_the_report_acknowledges_them():
     # 4100 bytes at 1022 per fragment: five of 820, not four full and a runt
-    o = ReportedOutgoing(bytes(4100), 1022, 0, 0, 7, 65)
+    o = ReportedOutgoing(bytes(4100), 1022, 0, 0, 7)
     assert (o.count, o.fragsize) == (5, 820) and Outgoing(bytes(4100), 1022, 0, 0, 7).count == 5
     o.new_round()
     sizes = [len(o.next_fragment()[2]) for _ in range(5)]
     assert sizes == [821] * 5 and o.next_fragment() is None
-    # the poll's fragment and short ones (instant messages) are not reported
-    assert o.report_wanted(821, False) and not o.report_wanted(821, True) and not o.report_wanted(64, False)
+    # the poll's fragment and those of half the MTU or less are not reported
+    assert o.report_min == 512 and o.report_wanted(821, False) and o.report_wanted(512, False)
+    assert not o.report_wanted(821, True) and not o.report_wanted(511, False)
     o.reported(1)
     o.reported(1)  # twice: no matter
     assert o.base == 0 and o.acked[1]
