@@ -16,9 +16,9 @@
 # What is not done, and why (docs/transport.md has the measurements):
 # - a FAILED fragment is not sent again at once but in the next round, from
 #   the SACK: the modem says FAILED when its acknowledgement was lost as
-#   often as when the burst was, and it acknowledges a train of bursts with
-#   one packet, so one lost acknowledgement fails a whole train that
-#   arrived. The SACK, which always follows (the poll goes last), says what
+#   often as when the burst was, and where it acknowledges a train of
+#   bursts with one packet (the emulator does), one lost acknowledgement
+#   fails a whole train that arrived. The SACK, which always follows (the poll goes last), says what
 #   is missing for a few bytes. Sent at once, the 4 KiB transfer took longer
 #   at 10 and 20 % loss;
 # - the poll's own fragment is not reported: the link keeps at most
