@@ -8,6 +8,12 @@ CAP_RELIABLE = const(2)  # it can confirm delivery of a frame
 CAP_BROADCAST = const(4)
 CAP_DISCOVERY = const(8)
 CAP_RANGING = const(16)
+# the modem reports by itself, at no extra air time, whether each frame of
+# more than half its MTU reached its addressee (EvoLogics burst data:
+# DELIVERED / FAILED): a link asked to confirm such a frame costs nothing
+# more, and the transport takes the report as an acknowledgement
+# (acomm.transport.delivery)
+CAP_DELIVERY = const(32)
 
 _FLAG_NAMES = (
     (CAP_ADDRESSING, "addressing"),
@@ -15,6 +21,7 @@ _FLAG_NAMES = (
     (CAP_BROADCAST, "broadcast"),
     (CAP_DISCOVERY, "discovery"),
     (CAP_RANGING, "ranging"),
+    (CAP_DELIVERY, "delivery"),
 )
 
 

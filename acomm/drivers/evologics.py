@@ -12,15 +12,18 @@
 # Notifications (RECV*, DELIVERED*, FAILED*, SEND*, ...) are told from
 # replies by their keyword, so they may arrive at any time.
 
-from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE, Capabilities
+from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_DELIVERY, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_RX
+from ..events import EV_DELIVERED, EV_RX, EV_TX_FAILED
 from . import evologics_wire as w
 from .evologics_sequences import (C_CTRL, C_PROBE, C_PTIME, C_SEND, CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING,
                                   KIND_NAMES, PTIME, QUEUED, R_BUSY, R_ERROR, R_OK, R_VALUE, AcousticSlot,
                                   EvologicsConfig)
 from .base import S_CONFIG, S_UP, AcousticDriver
+
+
+MAX_AWAITING = 8  # bursts sent whose DELIVERED / FAILED is still to come
 
 
 class EvologicsDriver(AcousticDriver):
@@ -89,6 +92,11 @@ class EvologicsDriver(AcousticDriver):
         self.rx_gap_ms = rx_gap_ms
         self.down_after = down_after
         mtu = burst_mtu if burst_mtu else w.IM_MAX
+        flags = CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING
+        if mtu > 2 * w.IM_MAX:
+            # a frame of more than half the MTU is burst data, which the
+            # modem always acknowledges itself and reports DELIVERED / FAILED
+            flags |= CAP_DELIVERY
         self.caps = Capabilities(
             manufacturer="EvoLogics",
             model="S2C",
@@ -96,7 +104,7 @@ class EvologicsDriver(AcousticDriver):
             mtu_rx=mtu,
             bitrate=burst_bitrate if burst_mtu else im_bitrate,
             latency_ms=self.airtime_ms(mtu, mtu > w.IM_MAX) + self.reply_window_ms(),
-            flags=CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING,
+            flags=flags,
         )
         self.config = EvologicsConfig(self, address, take_control, check_mode, notifications, extra_commands, retry_ms)
         self.last_ptime_us = None  # propagation time after the latest delivered ack
@@ -118,6 +126,7 @@ class EvologicsDriver(AcousticDriver):
         self._ctrl = False  # AT@CTRL due (someone took control)
         self._ptime = False  # AT?T due for last_ptime_us
         self.slot = AcousticSlot(self, mtu)
+        self.awaiting = []  # [handle, address, deadline]: bursts sent, DELIVERED / FAILED to come, in order
 
     # -- timing model ------------------------------------------------------
     def airtime_ms(self, nbytes, burst=False):
@@ -183,7 +192,16 @@ class EvologicsDriver(AcousticDriver):
         if r.partial() and ticks_diff(now, self._rx_at) >= self.rx_gap_ms:
             self._now = now
             r.flush()  # a line that never ended
+        if self.awaiting and ticks_diff(now, self.awaiting[0][2]) >= 0:
+            # the modem said nothing about a burst it sent: as for the slot
+            self._fail_awaiting("no final word from the modem")
+            self._slot_gave_up(now)
         AcousticDriver.poll(self, now)
+
+    def _fail_awaiting(self, reason):
+        for b in self.awaiting:
+            self._events.append((EV_TX_FAILED, b[0], reason))
+        self.awaiting = []
 
     def _slot_gave_up(self, now):
         # it accepted a transmission and then said nothing: it may have
@@ -207,7 +225,10 @@ class EvologicsDriver(AcousticDriver):
         if slot.state == PTIME:
             self.command(now, C_PTIME, b"AT?T")
             return
-        if slot.state == QUEUED and not self._held(now):
+        # while bursts await their report, the modem takes only more bursts
+        # (a bounded list: at most MAX_AWAITING)
+        n = len(self.awaiting)
+        if slot.state == QUEUED and not self._held(now) and (not n or slot.kind == K_BURST and n < MAX_AWAITING):
             slot.write(self._out)
             self._out.extend(self.eol)
             self._await(now, C_SEND, self.cmd_timeout_ms)
@@ -255,6 +276,7 @@ class EvologicsDriver(AcousticDriver):
             self._restart(now, None)
 
     def _restart(self, now, reason):
+        self._fail_awaiting(reason or "modem set up again")
         if self.slot.state != IDLE and reason is not None:
             self.slot.fail(reason)
         elif self.slot.state not in (IDLE, QUEUED):
@@ -389,6 +411,9 @@ class EvologicsDriver(AcousticDriver):
                 self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
         elif k == b"RECV":
             rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 7)
+            if dst == self.config.own_addr:
+                # burst data is always acknowledged, by our modem itself
+                self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
         elif k == b"RECVIMS":
             rssi, integ, vel = r.int_field(li + 5), r.int_field(li + 6), r.float_field(li + 7)
         else:
@@ -431,6 +456,13 @@ class EvologicsDriver(AcousticDriver):
 
     def _burst_outcome(self, r):
         dst = r.int_field(2)
+        for b in self.awaiting:
+            if b[1] == dst:
+                # the oldest burst to dst: the modem reports them in order
+                self.awaiting.remove(b)
+                ok = r.is_word(b"DELIVERED")
+                self._events.append((EV_DELIVERED, b[0]) if ok else (EV_TX_FAILED, b[0], "FAILED"))
+                return
         slot = self.slot
         if dst is None or not slot.awaiting((K_BURST,), dst):
             self.stats["stale"] += 1

@@ -29,8 +29,10 @@
 #   CMD     AT*SENDIM / AT*SEND written, waiting for OK, ERROR or BUSY
 #   AIR     the modem took it: SENDEND (or the airtime model when extended
 #           notifications are off) gives EV_TX_DONE; an acknowledged IM
-#           ends with DELIVEREDIM / FAILEDIM, burst data with DELIVERED /
-#           FAILED, a noack IM at SENDEND; a watchdog covers silence
+#           ends with DELIVEREDIM / FAILEDIM, a noack IM at SENDEND; a
+#           watchdog covers silence. Burst data leaves the slot at SENDEND
+#           for the driver's list of bursts awaiting their DELIVERED /
+#           FAILED (the modem buffers bursts: the next one may follow)
 #   PTIME   a ping was delivered: AT?T is due or written, its answer (the
 #           propagation time) gives EV_RANGE
 #
@@ -226,6 +228,12 @@ class AcousticSlot(SlotBase):
         if self.acked():
             wait += d.reply_window_ms() * d.im_tries
         self.deadline = ticks_add(now, wait)
+        if self.kind == K_BURST:
+            # the modem reports a train of bursts together: the ones before
+            # it to the same address wait as long
+            for b in d.awaiting:
+                if b[1] == self.addr:
+                    b[2] = self.deadline
 
     def poll(self, now):
         # Returns True when the watchdog gave up on the modem.
@@ -237,6 +245,7 @@ class AcousticSlot(SlotBase):
             if not self.acked():
                 self.state = IDLE  # noack: nothing more will come
                 return False
+            self._left()
         if self.deadline is not None and ticks_diff(now, self.deadline) >= 0:
             self.fail("no final word from the modem")
             return True
@@ -257,6 +266,14 @@ class AcousticSlot(SlotBase):
             return  # a ping reports only its range
         self.tx_done()
         if not self.acked():
+            self.state = IDLE
+        self._left()
+
+    def _left(self):
+        # burst data has left: its report comes later, and the modem takes
+        # the next burst meanwhile
+        if self.kind == K_BURST and self.state == AIR:
+            self.d.awaiting.append([self.handle, self.addr, self.deadline])
             self.state = IDLE
 
     def fail(self, reason):

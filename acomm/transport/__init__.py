@@ -65,6 +65,8 @@ _EXPIRED = const(6)
 _FAILED = const(8)
 _QUEUED = const(1)
 _TRANSMITTED = const(4)
+_WAITING = const(3)
+_CAP_DELIVERY = const(32)  # acomm.drivers.caps
 
 _EV_PACKET = const(27)
 _EV_REFUSED = const(28)
@@ -308,8 +310,15 @@ class Transport:
         if blob is None or len(blob) != len(head) + p.size:
             self._final(now, p, _FAILED, "lost from the store")
             return
+        # a modem that reports delivery by itself acknowledges fragments
+        # (acomm.transport.delivery: loaded only there, never on the buoy)
         try:
-            p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
+            if link.modem_acks and link.driver.caps.flags & _CAP_DELIVERY:
+                from .delivery import ReportedOutgoing
+
+                p.out = ReportedOutgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
+            else:
+                p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
         except ValueError as e:
             self._final(now, p, _FAILED, str(e))
             return
@@ -386,9 +395,12 @@ class Transport:
         life = p.expiry - self.wall()
         if life < 1:
             life = 1
-        if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, ftype=_SEGMENT, seq=head):
-            poll = sg.is_poll(head)
-            self._reqs[rid] = (p, index, poll)
+        poll = sg.is_poll(head)
+        # confirmed by the modem's own delivery report? (acomm.transport.delivery)
+        rep = p.out.reports and p.out.report_wanted(len(data), poll)
+        if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, ack=rep, retries=0,
+                          ftype=_SEGMENT, seq=head):
+            self._reqs[rid] = (p, index, None if rep else poll)
             p.inflight += 1
             if poll:
                 p.polling += 1
@@ -401,11 +413,24 @@ class Transport:
         r = self._reqs.get(rid)
         if r is None:
             return False
+        p, index, poll = r
         if status < _TRANSMITTED:
+            if status == _WAITING and poll is None and p is not None:
+                # a reported fragment left the modem, its report is to come:
+                # the modem takes the next one meanwhile (acomm.transport.delivery)
+                p.inflight -= 1
+                self._reqs[rid] = (p, index, ())
             return True
         del self._reqs[rid]
-        p, index, poll = r
         if p is None:
+            return True
+        if poll is None or poll == ():
+            # a reported fragment: DELIVERED acknowledges it; otherwise the
+            # round's SACK says whether it is missing
+            if poll is None:
+                p.inflight -= 1
+            if status == _DELIVERED and p.out is not None:
+                p.out.reported(index)
             return True
         p.inflight -= 1
         if poll:

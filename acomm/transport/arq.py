@@ -19,6 +19,10 @@ class Outgoing:
     # blob: the packet header and body as sent, bytes or an object with
     # len() and read(offset, n) (acomm.transport.packetstore.StoredBlob: the body
     # stays in the store); fragsize: payload bytes per fragment on this hop.
+    # reports: the modem's delivery reports acknowledge fragments
+    # (acomm.transport.delivery.ReportedOutgoing)
+    reports = False
+
     def __init__(self, blob, fragsize, lane, gen, pid):
         if fragsize < 1:
             raise ValueError("fragment size must be positive")

@@ -2,7 +2,7 @@
 # exchange of ref/modem-protocols.md section 2.6, the line reader on binary
 # payloads, then two Nodes whose Links drive EvologicsDrivers over FakeUART
 # lines to emulated modems on one acoustic medium, through every fault mode.
-from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_RANGING, CAP_RELIABLE
+from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_DELIVERY, CAP_RANGING, CAP_RELIABLE
 from acomm.compat import TICKS_MAX
 from acomm.drivers import evologics_wire as w
 from acomm.drivers.evologics import EvologicsDriver
@@ -125,12 +125,14 @@ def test_driver_start_sets_the_modem_up():
     d = up_driver()
     c = d.caps
     assert (c.manufacturer, c.model, c.mtu_tx, c.bitrate) == ("EvoLogics", "S2C", 1024, 5000)
-    assert c.flags == CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING
+    # burst data reports its delivery by itself; without burst (MTU 64) nothing does
+    assert c.flags == CAP_ADDRESSING | CAP_BROADCAST | CAP_RELIABLE | CAP_RANGING | CAP_DELIVERY
+    assert c.flag_names() == ["addressing", "reliable", "broadcast", "ranging", "delivery"]
     assert d.broadcast_addr == 255 and d.config.zx and d.sound_speed == 1500
     d = up_driver(7)
     assert d.address == 7
     d = EvologicsDriver(burst_mtu=0, take_control=False, check_mode=False, extra_commands=(b"AT!L2",))
-    assert d.caps.mtu_tx == 64 and d.caps.bitrate == 976
+    assert d.caps.mtu_tx == 64 and d.caps.bitrate == 976 and not d.caps.has(CAP_DELIVERY)
     d.poll(0)
     assert d.take_output() == b"AT?AL\n"
     d.feed(1, b"3\r\n")
@@ -292,6 +294,54 @@ def test_driver_timeouts_and_watchdog():
     assert d.take_output() == b"AT@CTRL\n" and not d.ready(limit)
 
 
+def test_driver_sends_bursts_while_their_reports_wait():
+    d = up_driver()
+    h1 = d.send(300, 3, bytes(100))
+    assert d.take_output() == b"AT*SEND,100,3," + bytes(100) + b"\n"
+    d.feed(310, OK)
+    assert not d.ready(310)
+    d.feed(2000, b"SENDEND,3,burst,1,1\r\n")
+    # it has left: the modem takes the next burst before the first's report
+    assert d.take_events() == [(EV_TX_DONE, h1)] and d.ready(2000) and len(d.awaiting) == 1
+    h2 = d.send(2010, 3, bytes(80))
+    assert d.take_output() == b"AT*SEND,80,3," + bytes(80) + b"\n"
+    d.feed(2020, OK + b"SENDEND,3,burst,1,1\r\n")
+    # an instant message waits until every burst is reported (the modem
+    # would say BUSY DELIVERING)
+    h3 = d.send(2030, 3, b"hi")
+    assert d.take_output() == b"" and not d.ready(2030)
+    # the reports come in order, per address
+    d.feed(3000, b"FAILED,100,3\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h2), (EV_TX_FAILED, h1, "FAILED")] and d.take_output() == b""
+    d.feed(3010, b"DELIVERED,80,3\r\n")
+    assert d.take_events() == [(EV_DELIVERED, h2)]
+    assert d.take_output() == b"AT*SENDIM,2,3,noack,hi\n"
+    d.feed(3020, OK + b"SENDEND,3,im,1,1\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h3)] and d.ready(3020)
+    # burst data received for us: our modem acknowledges it, so the next
+    # command waits until it is done
+    d.feed(4000, b"RECV,3,2,1,5000,-48,197,100222,0.00,abc\r\n")
+    assert d.take_events() == [(EV_RX, 2, 1, b"abc")]
+    h5 = d.send(4000, 2, b"ok")
+    assert d.take_output() == b""
+    d.poll(4000 + d.turnaround_ms + d.airtime_ms(0))
+    assert d.take_output() == b"AT*SENDIM,2,2,noack,ok\n"
+    d.feed(4300, OK + b"SENDEND,2,im,1,1\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h5)]
+    # a burst the modem never reports on: the watchdog fails it and sets
+    # the modem up again
+    h4 = d.send(5000, 3, bytes(100))
+    d.take_output()
+    d.feed(5010, OK + b"SENDEND,3,burst,1,1\r\n")
+    assert d.take_events() == [(EV_TX_DONE, h4)]
+    limit = d.awaiting[0][2]
+    d.poll(limit - 1)
+    assert d.take_events() == []
+    d.poll(limit)
+    assert d.take_events() == [(EV_TX_FAILED, h4, "no final word from the modem")] and not d.awaiting
+    assert d.take_output() == b"AT@CTRL\n"
+
+
 def test_driver_detects_reboots_and_silence():
     d = up_driver()
     h = d.send(10, 2, b"x", True)
@@ -385,6 +435,30 @@ def test_emulator_refuses_and_times_out():
     a.reboot(12100)
     run_emulators((a,), 12100, 13200)
     assert a.address == 4
+
+
+def test_emulator_sends_buffered_bursts_as_a_train_acknowledged_once():
+    m = Medium(default_distance=150.0)
+    a = EvologicsEmulator(m, 1)
+    b = EvologicsEmulator(m, 2)
+    a.feed(0, b"AT*SEND,100,2," + bytes(100) + b"\n")
+    assert a.take_output() == OK
+    # on the air: one more is buffered, a third is not taken
+    a.feed(10, b"AT*SEND,80,2," + bytes(80) + b"\n")
+    assert a.take_output() == OK
+    a.feed(20, b"AT*SEND,80,2," + bytes(80) + b"\n")
+    assert a.take_output() == b"BUSY BACKOFF STATE\r\n"
+    # the second follows the first (310 ms of air) at once; the remote
+    # acknowledges both with one packet once nothing more arrives
+    out_a, out_b = run_emulators((a, b), 20, 700)
+    assert out_a == b"" and out_b.count(b"RECV,") == 2 and m.in_flight() == 0
+    a.feed(700, b"AT*SENDIM,2,2,noack,hi\n")  # waiting for the train's ack
+    assert a.take_output() == b"BUSY DELIVERING\r\n"
+    b.feed(700, b"AT*SENDIM,2,1,noack,hi\n")  # about to acknowledge
+    assert b.take_output() == b"BUSY BACKOFF STATE\r\n"
+    out_a, out_b = run_emulators((a, b), 700, 3000)
+    assert out_a == b"DELIVERED,100,2\r\nDELIVERED,80,2\r\n" and out_b == b""
+    assert a.xcvr.sent == 2 and b.xcvr.sent == 1 and a.ptime_us == 100000
 
 
 def test_emulator_at_mode_envelope_and_data():

@@ -22,8 +22,9 @@ PRIVATE = re.compile(r"^_([A-Z][A-Z0-9_]*) = const\((.+?)\)", re.M)
 SCOPED = {
     "acomm.drivers.base": (("drivers/seatrac.py", "drivers/seatrac_sequences.py", "drivers/iridium.py",
                             "drivers/atdriver.py"), ("IDLE", "QUEUED", "S_START", "S_CONFIG", "S_UP")),
-    "acomm.drivers.caps": (("drivers/seatrac.py", "link/__init__.py", "link/ranging.py"),
-                           ("CAP_ADDRESSING", "CAP_BROADCAST", "CAP_DISCOVERY", "CAP_RANGING", "CAP_RELIABLE")),
+    "acomm.drivers.caps": (("drivers/seatrac.py", "link/__init__.py", "link/ranging.py", "transport/__init__.py"),
+                           ("CAP_ADDRESSING", "CAP_BROADCAST", "CAP_DISCOVERY", "CAP_RANGING", "CAP_RELIABLE",
+                            "CAP_DELIVERY")),
     "acomm.drivers.atcommand": (("drivers/iridium.py", "drivers/atdriver.py"), ("R_OK", "R_END", "R_TIMEOUT")),
     "acomm.drivers.seatrac_sequences": (("drivers/seatrac.py",), ("CMD", "K_DAT", "K_PING")),
     "acomm.link.txqueue": (("link/__init__.py", "link/ranging.py"), ("MAX_LIFESPAN_MS",)),

@@ -276,10 +276,11 @@ def render(records, machine):
     L.extend(_transfer_table(f))
     a("")
     a("On SeaTrac, whose 30-byte frames each cost a round trip under stop-and-wait, the selective ARQ "
-      "moves %s times as much as stop-and-wait without loss and %s times at 20 %% loss. EvoLogics sends "
-      "1 KiB bursts, so 4 KiB is a handful of frames and the gain is small: %s at 0 %%, %s at 10 %% and "
-      "%s at 20 %% loss (at 20 %% both lose most of the ideal; why acomm's lead shrinks there was not "
-      "investigated for this table)." % (
+      "moves %s times as much as stop-and-wait without loss and %s times at 20 %% loss. On EvoLogics the "
+      "transport hands the modem its bursts one behind the other, the modem sends them as one train and "
+      "its own DELIVERED acknowledges each (docs/transport.md), while stop-and-wait waits for each "
+      "burst's acknowledgement: %s times as much at 0 %%, %s at 10 %% and %s at 20 %% loss, where "
+      "every lost burst costs stop-and-wait the modem's full acknowledgement timeout." % (
           f.s("transfer_arq_over_saw_seatrac_0"), f.s("transfer_arq_over_saw_seatrac_20"),
           f.s("transfer_arq_over_saw_evologics_0"), f.s("transfer_arq_over_saw_evologics_10"),
           f.s("transfer_arq_over_saw_evologics_20")))

@@ -57,6 +57,7 @@ package(
         "prng.py",
         "transport/__init__.py",
         "transport/arq.py",
+        "transport/delivery.py",
         "transport/memorystore.py",
         "transport/packetstore.py",
         "transport/route.py",

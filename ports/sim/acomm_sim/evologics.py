@@ -147,7 +147,7 @@ class EvologicsEmulator(SansIO, FaultModes):
         if self._still_booting(now):
             return
         self.xcvr.poll(now)
-        if self._raw and self.remote_addr is not None and self.xcvr.busy(now) is None:
+        if self._raw and self.remote_addr is not None and self.xcvr.busy(now, True) is None:
             chunk = bytes(self._raw[: self.burst_max])
             self._raw = self._raw[self.burst_max :]
             self.xcvr.send(now, P_BURST, self.remote_addr, True, chunk)
@@ -359,7 +359,7 @@ class EvologicsEmulator(SansIO, FaultModes):
         if not data or len(data) > limit:
             self.reply(b"ERROR BUFFER OVERFLOW" if data else _FORMAT)
             return
-        busy = self.xcvr.busy(now)
+        busy = self.xcvr.busy(now, kind == P_BURST)
         if busy is not None:
             self.reply(busy)
             return

@@ -10,6 +10,17 @@
 # figure of the oceansystemslab driver) or burst_bitrate; an ack is an empty
 # packet sent turnaround_ms after the IM ended. The sender gives up after
 # 2 * max_range_m / c + turnaround + one empty packet past its own end.
+#
+# Burst data is buffered (EvoLogics' evins sends the next AT*SEND while
+# earlier bursts still wait for their DELIVERED / FAILED, docs/transport.md):
+# the modem takes a further burst while one is on the air (burst_queue of
+# them wait at most), and sends it right after, in the same train, when it
+# goes to the same address and comes within turnaround_ms of the last one's
+# end (at most train_max bursts). The remote modem acknowledges a train once,
+# turnaround_ms after its last burst (when no further one has begun to
+# arrive), naming the bursts it heard; the sender then says DELIVERED or
+# FAILED for each, in order. How the S2C acknowledges bursts on the air is
+# not documented: the train is this emulator's choice.
 
 from math import log10
 
@@ -26,7 +37,7 @@ _RX_WORD = {P_IM: b"RECVIM", P_IMS: b"RECVIMS", P_PBM: b"RECVPBM", P_BURST: b"RE
 
 
 class Packet:
-    __slots__ = ("kind", "src", "dst", "ack", "data", "pid")
+    __slots__ = ("kind", "src", "dst", "ack", "data", "pid", "counter")
 
     def __init__(self, kind, src, dst, ack=False, data=b"", pid=None):
         self.kind = kind
@@ -35,6 +46,7 @@ class Packet:
         self.ack = ack
         self.data = data
         self.pid = pid
+        self.counter = 0  # burst data: the sender's burst counter
 
 
 class Transceiver:
@@ -53,9 +65,19 @@ class Transceiver:
 
     def reset(self):
         self._tx_until = None
-        self._pending = None  # [ack kind, dst, deadline, nbytes]
+        self._pending = None  # [ack kind, dst, deadline, nbytes]: an IM awaiting its ack
         self._reply = None  # [due, Packet]: our automatic acknowledgement
         self._ends = []  # [due, line]: SENDEND of our packets
+        self._bq = []  # [dst, data, pid]: bursts taken, not on the air yet
+        self._train = []  # [counter, dst, nbytes]: bursts of the train, awaiting its ack
+        self._train_end = None  # when the train's last burst left
+        self._train_wait = None  # the train is closed: its ack is due before this
+        self._heard_bursts = {}  # src -> counters of its bursts heard since our last ack
+        self._ack_due = None  # [due, src]: acknowledge src's train then, unless more arrives
+        self._count = 0  # burst counter
+
+    burst_queue = 1  # bursts waiting behind the one on the air
+    train_max = 8  # bursts per acknowledgement
 
     # -- timing ------------------------------------------------------------------
     def airtime(self, n, burst=False):
@@ -69,28 +91,72 @@ class Transceiver:
     def transmitting(self, now):
         return self._tx_until is not None and ticks_diff(self._tx_until, now) > 0
 
-    def busy(self, now):
-        # None when free, else the modem's reason
-        if self.transmitting(now) or self._reply is not None:
+    def busy(self, now, burst=False):
+        # None when free (for burst data: when its buffer takes one more),
+        # else the modem's reason
+        if self._reply is not None or self._ack_due is not None:
             return b"BUSY BACKOFF STATE"
-        if self._pending is not None:
+        if burst and self._pending is None and len(self._bq) < self.burst_queue:
+            if not self.transmitting(now) or self._train:
+                return None
+        if self.transmitting(now):
+            return b"BUSY BACKOFF STATE"
+        if self._pending is not None or self._train or self._bq:
             return b"BUSY DELIVERING"
         return None
 
     # -- commands ------------------------------------------------------------------
     def send(self, now, kind, dst, ack, data, pid=None):
-        # After the command's OK: the packet goes on the air now.
-        m = self.modem
+        # After the command's OK: an IM goes on the air now, burst data
+        # when the modem gets to it (_next_burst).
+        if kind == P_BURST:
+            self._bq.append([dst, bytes(data), pid])
+            self._next_burst(now)
+            return
         p = Packet(kind, self.addr, dst, ack, bytes(data), pid)
-        burst = kind == P_BURST
-        air = self.airtime(len(data), burst)
+        air = self._start(now, p, b"im")
+        if ack:
+            self._pending = [P_ACK, dst, ticks_add(now, air + self.window()), len(data)]
+
+    def _start(self, now, p, typ):
+        # p on the air now, with its SENDSTART and SENDEND; -> its airtime
+        m = self.modem
+        air = self.airtime(len(p.data), p.kind == P_BURST)
         self._transmit(now, p, air)
-        typ = b"burst" if burst else b"im"
         if m.zx:
-            m.notify(b"SENDSTART,%d,%s,%d,0" % (dst, typ, air * 1000))
-            self._ends.append([ticks_add(now, air), b"SENDEND,%d,%s,%d,%d" % (dst, typ, 0, air * 1000)])
-        if burst or ack:
-            self._pending = [P_BACK if burst else P_ACK, dst, ticks_add(now, air + self.window()), len(data)]
+            m.notify(b"SENDSTART,%d,%s,%d,0" % (p.dst, typ, air * 1000))
+            self._ends.append([ticks_add(now, air), b"SENDEND,%d,%s,%d,%d" % (p.dst, typ, 0, air * 1000)])
+        return air
+
+    def _next_burst(self, now):
+        # The next buffered burst goes on the air if the train goes on (same
+        # address, close enough behind, not too long) or none is under way.
+        if not self._bq or self.transmitting(now) or self._train_wait is not None or self._reply is not None:
+            return
+        dst, data, pid = self._bq[0]
+        t = self._train
+        if t and (t[0][1] != dst or len(t) >= self.train_max or ticks_diff(now, self._train_end) > self.turnaround_ms):
+            self._close_train()
+            return
+        self._bq.pop(0)
+        self._count = (self._count + 1) & 0xFFFF
+        p = Packet(P_BURST, self.addr, dst, True, data, pid)
+        p.counter = self._count
+        self._train_end = ticks_add(now, self._start(now, p, b"burst"))
+        t.append([self._count, dst, len(data)])
+
+    def _close_train(self):
+        # nothing more behind the last burst: wait for the remote's ack
+        self._train_wait = ticks_add(self._train_end, self.window())
+
+    def _train_done(self, heard):
+        # the train's outcome, burst by burst (heard: the counters the
+        # remote acknowledged, or () when its ack never came)
+        m = self.modem
+        for c, dst, n in self._train:
+            m.notify((b"DELIVERED,%d,%d" if c in heard else b"FAILED,%d,%d") % (n, dst))
+        self._train = []
+        self._train_wait = None
 
     def _transmit(self, t, p, air):
         self.sent += 1
@@ -106,18 +172,30 @@ class Transceiver:
         if r is not None and ticks_diff(now, r[0]) >= 0:
             self._reply = None
             self._transmit(r[0], r[1], self.airtime(0))
+        a = self._ack_due
+        if a is not None and ticks_diff(now, a[0]) >= 0 and self.medium.arriving(self.addr, a[1]) is None:
+            # the train from a[1] is over: one ack names every burst heard
+            self._ack_due = None
+            heard = self._heard_bursts.pop(a[1], [])
+            self._transmit(now, Packet(P_BACK, self.addr, a[1], False, _counters(heard)), self.airtime(0))
         pd = self._pending
         if pd is not None and ticks_diff(now, pd[2]) >= 0:
             self._pending = None
-            if pd[0] == P_ACK:
-                m.notify(b"FAILEDIM,%d" % pd[1])
-            else:
-                m.notify(b"FAILED,%d,%d" % (pd[3], pd[1]))
+            m.notify(b"FAILEDIM,%d" % pd[1])
+        if self._train_wait is not None and ticks_diff(now, self._train_wait) >= 0:
+            self._train_done(())
+        if self._train and self._train_wait is None and not self.transmitting(now):
+            if not self._bq and ticks_diff(now, self._train_end) > self.turnaround_ms:
+                self._close_train()
+        self._next_burst(now)
 
     def cancel(self):
         # ATZ: forget what is waiting (the packet on the air goes on)
         pd = self._pending
         self._pending = None
+        self._bq = []
+        self._train = []
+        self._train_wait = None
         if pd is not None and pd[0] == P_ACK:
             self.modem.notify(b"CANCELEDIM,%d" % pd[1])
 
@@ -128,23 +206,28 @@ class Transceiver:
             return
         self.heard += 1
         mine = p.dst == self.addr
-        if p.kind == P_ACK or p.kind == P_BACK:
+        if p.kind == P_ACK:
             pd = self._pending
-            if mine and pd is not None and pd[0] == p.kind and pd[1] == src:
+            if mine and pd is not None and pd[1] == src:
                 self._pending = None
                 m.ptime_us = int(dist * 1e6 / self.medium.sound_speed + 0.5)
-                if p.kind == P_ACK:
-                    m.notify(b"DELIVEREDIM,%d" % src)
-                else:
-                    m.notify(b"DELIVERED,%d,%d" % (pd[3], src))
+                m.notify(b"DELIVEREDIM,%d" % src)
+            return
+        if p.kind == P_BACK:
+            if mine and self._train and self._train[0][1] == src:
+                m.ptime_us = int(dist * 1e6 / self.medium.sound_speed + 0.5)
+                self._train_done(_uncounters(p.data))
             return
         if not (mine or p.dst == m.broadcast_addr or (m.promiscuous and p.kind != P_BURST)):
             return
         self._report(t, p, dist)
-        if mine and (p.ack or p.kind == P_BURST) and self._reply is None:
+        if mine and p.kind == P_BURST:
+            # the firmware acknowledges the train by itself once it is over
+            self._heard_bursts.setdefault(src, []).append(p.counter)
+            self._ack_due = [ticks_add(t, self.turnaround_ms), src]
+        elif mine and p.ack and self._reply is None:
             # the firmware acknowledges by itself
-            kind = P_BACK if p.kind == P_BURST else P_ACK
-            self._reply = [ticks_add(t, self.turnaround_ms), Packet(kind, self.addr, src)]
+            self._reply = [ticks_add(t, self.turnaround_ms), Packet(P_ACK, self.addr, src)]
 
     def _report(self, t, p, dist):
         m = self.modem
@@ -175,6 +258,18 @@ class Transceiver:
             m.notify(b"RECVSTART")
             m.notify(b"RECVEND,%d,%d,%d,%d" % (m.clock_us(t), dur, rssi, integ))
         m.received(head + tail, p.data, burst)
+
+
+def _counters(cs):
+    # the burst counters an acknowledgement names, two bytes each
+    out = bytearray()
+    for c in cs:
+        out.extend(bytes(((c >> 8) & 0xFF, c & 0xFF)))
+    return bytes(out)
+
+
+def _uncounters(b):
+    return [(b[i] << 8) | b[i + 1] for i in range(0, len(b) - 1, 2)]
 
 
 def _stamp(line, usec):
