@@ -78,15 +78,20 @@ _PIPELINE = const(3)  # fragments of one transfer in a link queue at a time
 _STALL_POLLS = const(3)  # unanswered polls in a row before trying another link
 _FULL_WAIT_MS = const(60000)  # a relay that was full is asked again after this
 
-class _Room:
-    # what the store's overflow rule needs to judge a packet not yet whole
-    # fields: size, prio, medium
-    pass
-
-
 class _Packet:
-    __slots__ = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link",
-                 "hop", "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks", "size")
+    # A packet this node sends or relays. Made with key, origin, final, pid,
+    # prio, expiry, body, compressed, medium, relayed and size; its transfer's
+    # state starts at the class's defaults below. On MicroPython an instance's
+    # attribute table grows by one reallocation at a time (8 for 22 names set
+    # at once, the last of 184 B): the allocations a relaying buoy, its heap
+    # fragmented, failed first. With the defaults a new packet sets 11.
+    out = link = hop = timer = polled = wait = group = None
+    inflight = polling = misses = chunks = 0
+
+
+# every field, for a copy of a packet (MEDIUM_ALL)
+_FIELDS = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link", "hop",
+           "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks", "size")
 
 
 def _wall_default():
@@ -183,8 +188,6 @@ class Transport:
         p.key = (origin << 16) | pid
         p.origin, p.final, p.pid, p.prio, p.expiry = origin, final, pid, prio, expiry
         p.body, p.compressed, p.medium = body, compressed, medium
-        p.out = p.link = p.hop = p.timer = p.polled = p.wait = p.group = None
-        p.inflight = p.polling = p.misses = p.chunks = 0
         p.relayed = origin != self.node_id
         # only the origin compresses: a relay forwards the body as the
         # origin chose it (a second try would not shrink it and costs a
@@ -223,7 +226,7 @@ class Transport:
             group = []
             for link in self.router.links(MEDIUM_ALL):
                 c = _Packet()
-                for k in _Packet.__slots__:
+                for k in _FIELDS:
                     setattr(c, k, getattr(p, k))
                 c.medium, c.group = link.name, group
                 group.append(c)
@@ -594,7 +597,7 @@ class Transport:
     def _can_take(self, h):
         if h.relay is None or h.relay[1] == self.node_id:
             return True  # for this node: delivered, never stored
-        q = _Room()
+        q = _Packet()  # not yet whole: what the store's overflow rule judges
         q.size, q.prio, q.medium = h.length, h.relay[2], None
         if self.packets.room(q):
             return True

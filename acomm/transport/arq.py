@@ -22,6 +22,16 @@ class Outgoing:
     # reports: the modem's delivery reports acknowledge fragments
     # (acomm.transport.delivery.ReportedOutgoing)
     reports = False
+    # The state that starts at a constant lives on the class until first set:
+    # on MicroPython each attribute an instance sets can grow its table by a
+    # reallocation, and a relaying buoy's fragmented heap failed those first.
+    base = 0  # every fragment below is acknowledged
+    round = ()  # indexes still to send in this round (replaced, never changed)
+    sent_in_round = 0
+    rounds = 0
+    complete = False
+    refused = None  # reason byte when the receiver refused
+    probing = False  # see probe()
 
     def __init__(self, blob, fragsize, lane, gen, pid):
         if fragsize < 1:
@@ -36,13 +46,6 @@ class Outgoing:
         self.gen = gen
         self.pid = pid
         self.acked = bytearray(self.count)
-        self.base = 0  # every fragment below is acknowledged
-        self.round = []  # indexes still to send in this round
-        self.sent_in_round = 0
-        self.rounds = 0
-        self.complete = False
-        self.refused = None  # reason byte when the receiver refused
-        self.probing = False  # see probe()
 
     def fragment(self, index, poll):
         # -> (head, bytes): see acomm.transport.segment; bytes None when the blob
@@ -158,19 +161,21 @@ class Outgoing:
 
 class Reassembly:
     # One packet arriving on one lane from one neighbour. Memory: the
-    # fragments received, at most max_bytes in all.
+    # fragments received, at most max_bytes in all. The state that starts at
+    # a constant lives on the class until first set (as in Outgoing).
+    size = 0
+    count = None
+    header = None
+    done_pid = None  # set once complete: the packet id we confirmed
+    _base = 0  # fragments 0.._base-1 have all arrived
+    unauthed = False  # a fragment came without a valid tag (acomm.frame.auth)
+    refused = None  # the reason this transfer was refused, kept for polls
+
     def __init__(self, gen, max_bytes, now):
         self.gen = gen
         self.max_bytes = max_bytes
         self.frags = {}
-        self.size = 0
-        self.count = None
-        self.header = None
         self.touched = now
-        self.done_pid = None  # set once complete: the packet id we confirmed
-        self._base = 0  # fragments 0.._base-1 have all arrived
-        self.unauthed = False  # a fragment came without a valid tag (acomm.frame.auth)
-        self.refused = None  # the reason this transfer was refused, kept for polls
 
     def add(self, index, payload, now):
         # Raises DecodeError for a fragment that contradicts the packet.
