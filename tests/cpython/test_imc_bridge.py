@@ -87,9 +87,17 @@ def test_uam_tx_frame_through_the_simulated_network_and_bad_input():
         for i in range(300):  # a flood of bad packets
             s.sendto(bad_crc, top_ep)
         # what overflows the socket buffer the kernel drops, requests too
-        # (UDP): let the gateway drain the flood before asking
-        time.sleep(0.5)
-        s.sendto(_tx_frame(8, "nobody", b"x", top["imc_id"]), top_ep)
+        # (UDP): ask with a request it must refuse until the refusal comes
+        # back, so the flood is drained before the real request goes
+        def refused8(got):
+            return [m.msg for _, m in got if m.msg["abbrev"] == "UamTxStatus" and m.msg["seq"] == 8]
+
+        st8 = []
+        for _ in range(50):
+            s.sendto(_tx_frame(8, "nobody", b"x", top["imc_id"]), top_ep)
+            st8 = refused8(_collect(s, refused8, 0.2))
+            if st8:
+                break
         s.sendto(_tx_frame(7, "auv", b"hello auv", top["imc_id"]), top_ep)
 
         def done(got):
@@ -100,9 +108,9 @@ def test_uam_tx_frame_through_the_simulated_network_and_bad_input():
         got = _collect(s, done, 5)
         names = [(src[1], m.msg["abbrev"]) for src, m in got]
         st7 = [m for src, m in got if m.msg["abbrev"] == "UamTxStatus" and m.msg["seq"] == 7]
-        st8 = [m for src, m in got if m.msg["abbrev"] == "UamTxStatus" and m.msg["seq"] == 8]
+        st8 += [m.msg for src, m in got if m.msg["abbrev"] == "UamTxStatus" and m.msg["seq"] == 8]
         rx = [(src, m) for src, m in got if m.msg["abbrev"] == "UamRxFrame"]
-        assert [m.msg["value"] for m in st8] == [E.UTS_INV_ADDR], names
+        assert st8 and all(m["value"] == E.UTS_INV_ADDR for m in st8), names
         values = [m.msg["value"] for m in st7]
         assert values[0] == E.UTS_IP and values[-1] == E.UTS_DELIVERED, values
         assert all(v in (E.UTS_IP, E.UTS_SENT) for v in values[:-1]), values
@@ -119,7 +127,7 @@ def test_uam_tx_frame_through_the_simulated_network_and_bad_input():
     c = report["systems"]["topside"]
     assert c["bad_sync"] == 2 and c["bad_size"] == 1 and c["unknown_id"] == 1, c
     assert c["bad_crc"] >= 100, c  # the kernel may drop part of the flood
-    assert c["requests"] == 1 and c["refused"] == 1, c
+    assert c["requests"] == 1 and c["refused"] >= len(st8) >= 1, c
 
 
 def _listener(port, multicast):
