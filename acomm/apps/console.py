@@ -48,11 +48,11 @@ def _age_s(now, then):
 
 
 def _advert_period(disc, nid):
-    # The advert period (ms) node nid announced, from what Discovery keeps
-    # per node ([last heard, period, state]). Read here rather than through
+    # The advert period (ms) node nid announced, from Discovery's table
+    # ([last heard, period, state] per node). Read here rather than through
     # a new Discovery method: one more method grows the class's dict on
     # every buoy, console or not (64 B of its heap, measured frozen).
-    e = disc._nodes.get(nid)
+    e = disc.nodes.get(nid)
     return None if e is None else e[1]
 
 

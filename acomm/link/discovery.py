@@ -55,7 +55,9 @@ class Discovery:
         self._wait = period_ms
         self.lost_after = lost_after
         self._cap = capacity
-        self._nodes = {}  # node id -> [last_heard, their period, state]
+        # node id -> [last heard, the period it announced, state]; read by
+        # the console, changed only here
+        self.nodes = {}
         self.ignored = 0
         # no node can be lost before this time (None: nobody to watch); a
         # lower bound, so poll() scans the table only when something may
@@ -64,13 +66,13 @@ class Discovery:
 
     def heard(self, node_id, now, period_ms=None):
         # Returns AVAILABLE when the node just became available, else None.
-        e = self._nodes.get(node_id)
+        e = self.nodes.get(node_id)
         if e is None:
-            if len(self._nodes) >= self._cap and not self._forget_one():
+            if len(self.nodes) >= self._cap and not self._forget_one():
                 self.ignored += 1
                 return None
             e = [now, period_ms or self.period_ms, _UNKNOWN]
-            self._nodes[node_id] = e
+            self.nodes[node_id] = e
         e[0] = now
         if period_ms:
             e[1] = period_ms
@@ -83,9 +85,9 @@ class Discovery:
         return None
 
     def _forget_one(self):
-        for k in self._nodes:
-            if self._nodes[k][2] == _UNAVAILABLE:
-                del self._nodes[k]
+        for k in self.nodes:
+            if self.nodes[k][2] == _UNAVAILABLE:
+                del self.nodes[k]
                 return True
         return False
 
@@ -95,8 +97,8 @@ class Discovery:
             return ()
         lost = None
         nxt = None
-        for k in self._nodes:
-            e = self._nodes[k]
+        for k in self.nodes:
+            e = self.nodes[k]
             if e[2] != _AVAILABLE:
                 continue
             left = e[1] * self.lost_after - ticks_diff(now, e[0])
@@ -115,16 +117,16 @@ class Discovery:
         return self._next is not None and ticks_diff(now, self._next) >= 0
 
     def state(self, node_id):
-        e = self._nodes.get(node_id)
+        e = self.nodes.get(node_id)
         return _UNKNOWN if e is None else e[2]
 
     def last_heard(self, node_id):
         # ticks when a frame from node_id was last heard, or None
-        e = self._nodes.get(node_id)
+        e = self.nodes.get(node_id)
         return None if e is None else e[0]
 
     def available(self):
-        return [k for k in self._nodes if self._nodes[k][2] == _AVAILABLE]
+        return [k for k in self.nodes if self.nodes[k][2] == _AVAILABLE]
 
     def advert_due(self, now, last_tx):
         return last_tx is None or ticks_diff(now, last_tx) >= self._wait
