@@ -220,9 +220,15 @@ def encode_elided_into(buf, ftype, seq, payload, flags=0):
 
 
 def encode_elided(frame):
-    buf = bytearray(len(frame.payload) + 2)
-    n = encode_elided_into(buf, frame.ftype, frame.seq, frame.payload, frame.flags)
-    return bytes(buf[:n])
+    # the header's bytes and then the payload's, in one concatenation: no
+    # buffer to fill and copy out again (half the time of a message's frame)
+    ftype = frame.ftype
+    seq = frame.seq
+    flags = frame.flags
+    _check_common(ftype, seq, flags, SEQ_MOD_ELIDED)
+    if flags:
+        return bytes((_X_FLAGS | (ftype << 4) | seq, flags)) + frame.payload
+    return bytes(((ftype << 4) | seq,)) + frame.payload
 
 
 def decode_elided(data, src, dst):
