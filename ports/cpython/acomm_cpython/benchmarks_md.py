@@ -325,7 +325,7 @@ def _simulator_section(f, a):
     rows = [("sim_speedup_16_nodes", "x"), ("sim_cost_16_nodes", "ms/s"), ("sim_cost_64_nodes", "ms/s"),
             ("sim_cost_256_nodes", "ms/s"), ("sim_cost_ratio_64_vs_16", ""), ("sim_cost_ratio_256_vs_64", ""),
             ("sim_memory_256_nodes", "B"), ("sweep_local_1_core_s", "s"), ("sweep_dask_2_workers_s", "s"),
-            ("sweep_speedup_2_workers", "x")]
+            ("sweep_speedup_2_workers", "x"), ("sweep_load_1min", "")]
     for name, unit in rows:
         if f.get(name) is not None:
             a("| %s | %s%s |" % (name, f.s(name), " " + unit if unit else ""))
