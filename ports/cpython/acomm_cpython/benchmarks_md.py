@@ -318,15 +318,16 @@ def _simulator_section(f, a):
       "simulated second (the fastest of three runs; wall time moved by a factor of 2 with the other work "
       "on this shared machine; a cost ratio of 4 for 4 times the nodes is linear); the memory is tracemalloc's peak while the 256-node world is "
       "built and runs a minute. The sweep runs the demo mission 12 times (3 losses, 2 MACs, 2 seeds, 20 "
-      "simulated minutes) in one process and then on a Dask LocalCluster of 2 worker processes (identical "
-      "CSVs).")
+      "simulated minutes) in one process and on a Dask LocalCluster of 2 worker processes, alternating "
+      "twice, the fastest of each (identical CSVs); sweep_load_1min is the machine's 1-minute load average "
+      "as its runs end.")
     a("")
     a("| figure | value |")
     a("|---|---|")
     rows = [("sim_speedup_16_nodes", "x"), ("sim_cost_16_nodes", "ms/s"), ("sim_cost_64_nodes", "ms/s"),
             ("sim_cost_256_nodes", "ms/s"), ("sim_cost_ratio_64_vs_16", ""), ("sim_cost_ratio_256_vs_64", ""),
             ("sim_memory_256_nodes", "B"), ("sweep_local_1_core_s", "s"), ("sweep_dask_2_workers_s", "s"),
-            ("sweep_speedup_2_workers", "x")]
+            ("sweep_speedup_2_workers", "x"), ("sweep_load_1min", "")]
     for name, unit in rows:
         if f.get(name) is not None:
             a("| %s | %s%s |" % (name, f.s(name), " " + unit if unit else ""))
@@ -335,7 +336,11 @@ def _simulator_section(f, a):
       "do are no longer visited: a node whose modem is idle sleeps until its next wake-up or a packet, and "
       "a node on a transparent modem also sleeps through its TDMA wait, its airtime and its idle timers "
       "(the steps skipped are those that did nothing; tests/core/test_world_fast.py checks that the events "
-      "are the same). The sweep's speed-up depends on what else runs on the machine's 2 cores.")
+      "are the same). The channel's cost per transmission no longer grows with the whole network: the "
+      "generator draws owed by stations out of reach are skipped in one step (acomm_sim.prngskip: the "
+      "same state as drawing them), and the collision check reads only the copies on their way to the "
+      "one receiver (docs/simulator.md has the profile). The sweep's speed-up depends on what else runs "
+      "on the machine's 2 cores: at a load above 2 the workers share them with that work.")
     a("")
 
 

@@ -21,6 +21,7 @@
 from acomm.compat import ticks_add, ticks_diff
 
 from .medium import Medium
+from .prngskip import skip
 
 
 def interpolate(curve, x):
@@ -86,6 +87,7 @@ class Channel(Medium):
         self._tracks = {}
         self._near = {}  # src -> reach (_near_of)
         self._grid = None  # (square east, square north) -> [addr] (_candidates)
+        self._place = None  # addr -> its place in the stations' order (_near_of)
         self._bursts = []  # (start, end, receiver or None)
         self._collided = {}  # flight seq -> True (lost at its receiver)
         self.collided = 0  # copies lost to a collision
@@ -119,11 +121,13 @@ class Channel(Medium):
     def attach(self, addr, station):
         self._near = {}
         self._grid = None
+        self._place = None
         Medium.attach(self, addr, station)
 
     def detach(self, addr):
         self._near = {}
         self._grid = None
+        self._place = None
         Medium.detach(self, addr)
 
     def _near_of(self, src):
@@ -144,18 +148,19 @@ class Channel(Medium):
             cand = self._candidates(src, lim)
             within = {dst: True for dst in cand if dst != src and self.distance(src, dst) < lim}
             # and, in the stations' order, how many out of reach come
-            # before each one within it, and after the last
+            # before each one within it, and after the last: from the
+            # stations' places, without walking all of them for each source
+            place = self._place
+            if place is None:
+                place = self._place = {a: i for i, a in enumerate(self._stations)}
+            me = place[src]
             steps = []
-            k = 0
-            for dst in self._stations:
-                if dst == src:
-                    continue
-                if dst in within:
-                    steps.append((k, dst))
-                    k = 0
-                else:
-                    k += 1
-            near = (within, tuple(steps), k, len(self._stations) - 1 - len(steps))
+            prev = -1
+            for i, dst in sorted((place[dst], dst) for dst in within):
+                steps.append((i - prev - 1 - (1 if prev < me < i else 0), dst))
+                prev = i
+            last = len(self._stations) - prev - 2 + (1 if me < prev else 0)
+            near = (within, tuple(steps), last, len(self._stations) - 1 - len(steps))
             self._near[src] = near
         return near
 
@@ -229,17 +234,17 @@ class Channel(Medium):
         end = self._start(now, src, airtime_ms)
         rng = self.rng
         if not self.loss:
-            # out of reach: one draw each (the curve's, certain), counted
-            nxt = rng.next32
+            # out of reach: one draw each (the curve's, certain), skipped
+            # (prngskip) and counted
             for k, dst in near[1]:
-                for _ in range(k):
-                    nxt()
+                if k:
+                    skip(rng, k)
                 d = self.distance(src, dst)
                 if self._lost_on_the_way(d):
                     continue
                 self._fly(now, end, src, dst, packet, d)
-            for _ in range(near[2]):
-                nxt()
+            if near[2]:
+                skip(rng, near[2])
             self.range_lost += near[3]
             return end
         within = near[0]
@@ -290,9 +295,9 @@ class Channel(Medium):
         end, seq, dst, _, _, start, _ = item
         hit = self._collided.pop(seq, False)
         if self.collisions:
-            for other in self._flight:
+            for other in self._bound.get(dst, {}).values():
                 # every other arrival at this receiver that overlaps this one
-                if other[2] == dst and ticks_diff(other[5], end) < 0 and ticks_diff(other[0], start) > 0:
+                if ticks_diff(other[5], end) < 0 and ticks_diff(other[0], start) > 0:
                     self._collided[other[1]] = True
                     hit = True
         if hit:

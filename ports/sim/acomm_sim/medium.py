@@ -32,6 +32,9 @@ class Medium:
         self._pos = {}
         self._tx = {}  # addr -> [(start, end), ...] newest last
         self._flight = []  # [end, seq, dst, src, packet, start, distance] by end
+        # the same copies by receiver: dst -> {seq: item}, so that what is
+        # on its way to one station is found without scanning them all
+        self._bound = {}
         self._seq = 0
         self.delivered = 0
         self.lost = 0
@@ -104,6 +107,10 @@ class Medium:
         prop = int(d * 1000 / self.sound_speed)
         self._seq += 1
         item = [ticks_add(end, prop), self._seq, dst, src, packet, ticks_add(now, prop), d]
+        b = self._bound.get(dst)
+        if b is None:
+            b = self._bound[dst] = {}
+        b[self._seq] = item
         f = self._flight
         # after every copy arriving at or before it (a binary search: a
         # large network has many copies on their way)
@@ -136,6 +143,7 @@ class Medium:
         for item in self._flight:
             sent_end = ticks_add(item[0], -int(item[6] * 1000 / self.sound_speed))
             if item[3] == src and ticks_diff(sent_end, now) > 0:
+                del self._bound[item[2]][item[1]]
                 continue
             keep.append(item)
         self._flight = keep
@@ -150,7 +158,8 @@ class Medium:
         f = self._flight
         while f and ticks_diff(f[0][0], now) <= 0:
             item = f.pop(0)
-            end, _, dst, src, packet, start, d = item
+            end, seq, dst, src, packet, start, d = item
+            del self._bound[dst][seq]
             st = self._stations.get(dst)
             if st is None:
                 continue
@@ -176,10 +185,11 @@ class Medium:
     def arriving(self, dst, src):
         # when the first bit of a packet from src in flight to dst arrives
         # (or arrived), or None: a modem may wait for a reply it has begun to hear
-        for item in self._flight:
-            if item[2] == dst and item[3] == src:
-                return item[5]
-        return None
+        first = None
+        for item in self._bound.get(dst, {}).values():
+            if item[3] == src and (first is None or ticks_diff(item[0], first[0]) < 0):
+                first = item
+        return None if first is None else first[5]
 
     def in_flight(self):
         return len(self._flight)
