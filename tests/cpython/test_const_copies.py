@@ -17,8 +17,7 @@ import acomm.events as events
 
 ROOT = os.path.join(os.path.dirname(__file__), "..", "..", "acomm")
 PRIVATE = re.compile(r"^_([A-Z][A-Z0-9_]*) = const\((.+?)\)", re.M)
-# (source module, its file, which files may hold copies of it)
-# source module -> (the files that copy from it, the names they copy)
+# source module -> (the files that copy from it, the public names they copy)
 SCOPED = {
     "acomm.drivers.base": (("drivers/seatrac.py", "drivers/seatrac_sequences.py", "drivers/iridium.py",
                             "drivers/atdriver.py"), ("IDLE", "QUEUED", "S_START", "S_CONFIG", "S_UP")),
@@ -30,6 +29,11 @@ SCOPED = {
     "acomm.link.txqueue": (("link/__init__.py", "link/ranging.py"), ("MAX_LIFESPAN_MS",)),
     "acomm.frame": (("transport/__init__.py",), ("SEGMENT",)),
     "acomm.transport.packetstore": (("transport/__init__.py",), ("DONE_MEMORY",)),
+}
+# the same for copies of a module's private constants (attributes on CPython)
+PRIVATE_SCOPED = {
+    "acomm.link": (("link/ranging.py",), ("IDLE", "SENDING", "K_PING")),  # the Link's slot
+    "acomm.transport.packetstore": (("transport/memorystore.py",), ("REC_OVERHEAD",)),  # a record's overhead
 }
 _CLAIMED = {(f, n) for files, names in SCOPED.values() for f in files for n in names}
 SOURCES = (
@@ -74,9 +78,11 @@ def test_every_private_copy_of_a_seatrac_code_is_seatrac_codes_value():
     assert not wrong, "\n".join(wrong)
 
 
-def test_every_private_copy_of_a_lower_modules_code_is_its_value():
-    wrong, seen = [], set()
-    for modname, (files, names) in SCOPED.items():
+def _scoped(table, prefix=""):
+    # -> ({(file, name) copied}, [what is wrong]) for a SCOPED-like table;
+    # prefix: "_" when the source's own constants are private
+    seen, wrong = set(), []
+    for modname, (files, names) in table.items():
         source = importlib.import_module(modname)
         for f in files:
             with open(os.path.join(ROOT, f)) as fh:
@@ -84,22 +90,24 @@ def test_every_private_copy_of_a_lower_modules_code_is_its_value():
             for n in names:
                 if n in copies:
                     seen.add((f, n))
-                    if int(copies[n], 0) != getattr(source, n):
-                        wrong.append("%s: _%s = %s, %s has %r" % (f, n, copies[n], modname, getattr(source, n)))
+                    if int(copies[n], 0) != getattr(source, prefix + n):
+                        wrong.append("%s: _%s = %s, %s has %r" % (f, n, copies[n], modname, getattr(source, prefix + n)))
+    return seen, wrong
+
+
+def test_every_private_copy_of_a_lower_modules_code_is_its_value():
+    seen, wrong = _scoped(SCOPED)
     assert not wrong, "\n".join(wrong)
     assert len(seen) >= 25  # the drivers', the link's and the transport's copies
 
 
-def test_the_ranging_jobs_copies_of_the_links_slot_constants_are_the_links():
+def test_copies_of_another_modules_private_constants_are_its_values():
     # acomm.link.ranging works on the Link's transmission slot: its states
-    # and kinds are the Link's private constants (attributes on CPython)
-    import acomm.link as link
-
-    with open(os.path.join(ROOT, "link", "ranging.py")) as fh:
-        copies = dict(PRIVATE.findall(fh.read()))
-    mine = [n for n in copies if hasattr(link, "_" + n) and not hasattr(events, n)]
-    assert set(mine) >= {"IDLE", "SENDING", "K_PING"}
-    wrong = [n for n in mine if int(copies[n], 0) != getattr(link, "_" + n)]
+    # and kinds are the Link's private constants; the RAM store counts a
+    # record as packetstore does
+    seen, wrong = _scoped(PRIVATE_SCOPED, "_")
+    assert {n for f, n in seen if f == "link/ranging.py"} >= {"IDLE", "SENDING", "K_PING"}
+    assert ("transport/memorystore.py", "REC_OVERHEAD") in seen
     assert not wrong, wrong
 
 
