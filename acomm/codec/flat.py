@@ -65,6 +65,19 @@ def _shifts(cur, n):
     return tuple(out)
 
 
+def _encode_failed(e, values, name):
+    # Raises the EncodeError of Message.encode_body for what a field loop
+    # caught (e) at field `name`. Shared by encode() and pack_one(), outside
+    # their loops: the fast path makes no call for it.
+    if isinstance(e, EncodeError):
+        raise pathed(e, name) from None
+    if isinstance(e, KeyError):
+        raise fail(EncodeError, "missing", name) from None
+    if name is None or not isinstance(values, dict):
+        raise fail(EncodeError, "values must be a dict, not %s" % type(values).__name__) from None
+    raise fail(EncodeError, "bad value %r" % (values.get(name),), name) from None
+
+
 def encode(w, values, p):
     """Writes the body; the errors of Message.encode_body, with their paths."""
     acc = 0
@@ -86,14 +99,8 @@ def encode(w, values, p):
                 n += 1
             acc = (acc << bits) | s.code(v)
             n += bits
-    except EncodeError as e:
-        raise pathed(e, name) from None
-    except KeyError:
-        raise fail(EncodeError, "missing", name) from None
-    except (TypeError, ValueError, AttributeError, IndexError):
-        if name is None or not isinstance(values, dict):
-            raise fail(EncodeError, "values must be a dict, not %s" % type(values).__name__) from None
-        raise fail(EncodeError, "bad value %r" % (values.get(name),), name) from None
+    except (EncodeError, KeyError, TypeError, ValueError, AttributeError, IndexError) as e:
+        _encode_failed(e, values, name)
     if n:
         w.write(acc, n)
 
@@ -118,14 +125,8 @@ def pack_one(msg_id, id_bits, values, p, max_bits):
                 n += 1
             acc = (acc << bits) | s.code(v)
             n += bits
-    except EncodeError as e:
-        raise pathed(e, name) from None
-    except KeyError:
-        raise fail(EncodeError, "missing", name) from None
-    except (TypeError, ValueError, AttributeError, IndexError):
-        if name is None or not isinstance(values, dict):
-            raise fail(EncodeError, "values must be a dict, not %s" % type(values).__name__) from None
-        raise fail(EncodeError, "bad value %r" % (values.get(name),), name) from None
+    except (EncodeError, KeyError, TypeError, ValueError, AttributeError, IndexError) as e:
+        _encode_failed(e, values, name)
     pad = (8 - (n & 7)) & 7
     return (acc << pad).to_bytes((n + pad) >> 3, "big")
 
