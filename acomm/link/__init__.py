@@ -151,7 +151,11 @@ class Link:
             ack_timeout_ms = 2 * driver.caps.latency_ms + 1000
         self.ack_timeout_ms = ack_timeout_ms
         self._fl = _Inflight()
-        self._acks = AckTable(ack_window)
+        # a modem that keeps its own list of frames awaiting their report
+        # (EvoLogics bursts) takes that many in a row: the window must not
+        # hold one of them back until the others' reports
+        w = getattr(driver, "max_awaiting", 0) if self.modem_acks else 0
+        self._acks = AckTable(w if w > ack_window else ack_window)
         self._dups = DuplicateFilter(dup_window_ms)
         self._active = {}  # req_id -> TxRequest, accepted and not yet final
         self._seqs = {}  # destination id (None: broadcast) -> next sequence number

@@ -77,6 +77,14 @@ _MAX_RX = const(8)
 _PIPELINE = const(3)  # fragments of one transfer in a link queue at a time
 _STALL_POLLS = const(3)  # unanswered polls in a row before trying another link
 _FULL_WAIT_MS = const(60000)  # a relay that was full is asked again after this
+# what a fragment's link request is (Transport._reqs)
+_F_POLL = const(1)  # it carries the round's poll
+_F_REPORTED = const(2)  # the modem reports its delivery (acomm.transport.delivery)
+_F_LEFT = const(4)  # reported, and it has left the modem: its report is to come
+# what a report means for the transfer (acomm.transport.delivery)
+_REPORT_COMPLETE = const(1)
+_REPORT_NEW_ROUND = const(2)
+_REPORT_REPOLL = const(3)
 
 class _Packet:
     # A packet this node sends or relays. Made with key, origin, final, pid,
@@ -319,7 +327,7 @@ class Transport:
             if link.modem_acks and link.driver.caps.flags & _CAP_DELIVERY:
                 from .delivery import ReportedOutgoing
 
-                p.out = ReportedOutgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
+                p.out = ReportedOutgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid, hop == p.final)
             else:
                 p.out = Outgoing(blob, link.mtu_for(hop) - sg.FRAG_HEADER, lane, gen, p.pid)
         except ValueError as e:
@@ -377,7 +385,7 @@ class Transport:
             self._request(p, now, o.repoll())
             return
         while p.inflight < _PIPELINE and not held:
-            if o.sent_in_round == len(o.round) - 1 and p.inflight:
+            if o.sent_in_round == len(o.round) - 1 and p.inflight and not (o.reports and o.to_destination):
                 # the poll goes last: the link queue may reorder, and a
                 # fragment after the poll would be on the air (deaf, half-
                 # duplex) when the SACK comes back
@@ -403,7 +411,9 @@ class Transport:
         rep = p.out.reports and p.out.report_wanted(len(data), poll)
         if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, ack=rep, retries=0,
                           ftype=_SEGMENT, seq=head):
-            self._reqs[rid] = (p, index, None if rep else poll)
+            self._reqs[rid] = (p, index, (_F_POLL if poll else 0) | (_F_REPORTED if rep else 0))
+            if rep:
+                p.out.awaiting += 1
             p.inflight += 1
             if poll:
                 p.polling += 1
@@ -416,34 +426,43 @@ class Transport:
         r = self._reqs.get(rid)
         if r is None:
             return False
-        p, index, poll = r
+        p, index, f = r
         if status < _TRANSMITTED:
-            if status == _WAITING and poll is None and p is not None:
+            if status == _WAITING and f & _F_REPORTED and not f & _F_LEFT and p is not None:
                 # a reported fragment left the modem, its report is to come:
                 # the modem takes the next one meanwhile (acomm.transport.delivery)
                 p.inflight -= 1
-                self._reqs[rid] = (p, index, ())
+                self._reqs[rid] = (p, index, f | _F_LEFT)
             return True
         del self._reqs[rid]
         if p is None:
             return True
-        if poll is None or poll == ():
-            # a reported fragment: DELIVERED acknowledges it; otherwise the
-            # round's SACK says whether it is missing
-            if poll is None:
-                p.inflight -= 1
-            if status == _DELIVERED and p.out is not None:
-                p.out.reported(index)
+        if not f & _F_LEFT:
+            p.inflight -= 1
+        o = p.out
+        if f & _F_REPORTED:
+            if o is None:
+                return True
+            if o.to_destination:
+                # the modem's reports are the acknowledgement
+                a = o.report(index, status == _DELIVERED)
+                if a == _REPORT_COMPLETE:
+                    self._final(now, p, _DELIVERED, "")
+                elif a == _REPORT_NEW_ROUND:
+                    o.new_round()
+                elif a == _REPORT_REPOLL:
+                    p.timer = now
+            elif status == _DELIVERED:
+                o.reported(index)  # to a relay: its SACK completes the transfer
             return True
-        p.inflight -= 1
-        if poll:
+        if f & _F_POLL:
             p.polling -= 1
-        if p.out is not None and poll:
-            if status == _TRANSMITTED:
-                p.polled = now
-                p.timer = ticks_add(now, self._sack_timeout(p))
-            else:
-                p.timer = now  # the poll never went: ask again at once
+            if o is not None:
+                if status == _TRANSMITTED:
+                    p.polled = now
+                    p.timer = ticks_add(now, self._sack_timeout(p))
+                else:
+                    p.timer = now  # the poll never went: ask again at once
         return True
 
     # -- how long to wait for a SACK -----------------------------------------------
@@ -494,8 +513,8 @@ class Transport:
         # wait for a SACK that has already come
         for rid in self._reqs:
             q = self._reqs[rid]
-            if q[0] is p and q[2]:
-                self._reqs[rid] = (p, q[1], False)
+            if q[0] is p and q[2] & _F_POLL:
+                self._reqs[rid] = (p, q[1], q[2] & ~_F_POLL)
                 p.polling -= 1
         o = p.out
         if o.refused is not None:
@@ -567,7 +586,7 @@ class Transport:
         if r.done_pid is None and r.complete():
             if not self._arrived(now, link, src, r):
                 return self._refuse(now, link, src, s, key, sg.REFUSE_FULL)
-        if s.poll or (r.done_pid is not None and index == r.count - 1):
+        if s.poll:
             self._answer_poll(now, link, src, s, r)
 
     def _refuse(self, now, link, src, s, key, reason):

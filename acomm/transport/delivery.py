@@ -1,29 +1,33 @@
-# The transport's implicit acknowledgement, on links whose modem reports by
-# itself whether a frame of more than half its MTU reached its addressee (the
+# The transport's acknowledgement on links whose modem reports by itself
+# whether a frame of more than half its MTU reached its addressee (the
 # driver's caps flag CAP_DELIVERY: an EvoLogics S2C acknowledges every burst
 # itself and says DELIVERED or FAILED, at no extra air time).
 #
-# The sender asks the link to confirm each fragment the modem reports on,
-# except the one that carries the poll, and takes the modem's DELIVERED as
-# the receiver's word for that fragment: it counts as acknowledged at once,
-# as if a SACK had listed it. The peer's SACK stays the authority: it still
-# completes the transfer (only a completion SACK does), and a SACK that says
-# the receiver lacks fragments the modem reported delivered (its reassembly
-# was dropped) puts them back (acomm.transport.arq Outgoing.on_sack). A
-# report twice, or a report and a SACK for the same fragment, changes
-# nothing.
+# To the packet's destination the reports are the acknowledgement. The
+# fragments the modem reports on ask for no SACK (their poll flag is off),
+# and the round is over when the last of its reports is in:
+# - every fragment DELIVERED: the transfer is complete;
+# - some DELIVERED, some FAILED: the modem heard the receiver's
+#   acknowledgement, so the FAILED ones are missing, and the next round
+#   sends them at once;
+# - none DELIVERED: the acknowledgement may be what was lost (the modem
+#   says FAILED then for bursts that arrived), so a bare poll asks the
+#   receiver, whose SACK says what is missing for a few bytes.
+# Without the SACK after each round a transfer ends when the modem's
+# acknowledgement comes back, a SACK's airtime and turnaround sooner, and the
+# receiver does not transmit while the sender may already send its next
+# packet. What a report cannot tell: that the destination's host took the
+# packet. A destination drops a packet that its modem acknowledged only when
+# it is over its max_packet, when it holds 8 reassemblies at once, or, in
+# strict mode, when it was not sealed with the key (acomm.transport); the
+# sender has then said delivered, and counts the refusal, if one comes, as a
+# bad segment.
 #
-# What is not done, and why (docs/transport.md has the measurements):
-# - a FAILED fragment is not sent again at once but in the next round, from
-#   the SACK: the modem says FAILED when its acknowledgement was lost as
-#   often as when the burst was, and where it acknowledges a train of
-#   bursts with one packet (the emulator does), one lost acknowledgement
-#   fails a whole train that arrived. The SACK, which always follows (the poll goes last), says what
-#   is missing for a few bytes. Sent at once, the 4 KiB transfer took longer
-#   at 10 and 20 % loss;
-# - the poll's own fragment is not reported: the link keeps at most
-#   ack_window (4) frames waiting for their report, and a fifth would hold
-#   the poll back until the train's acknowledgement, off the train.
+# To a relay the SACK stays the authority: the relay may be full, and only
+# its SACK says it took custody. The reports acknowledge the fragments that
+# do not carry the poll, as if a SACK had listed them; a SACK that says a
+# reported fragment is missing (the relay dropped its reassembly) puts it
+# back, and only a completion SACK completes the transfer.
 #
 # Burst sizing: the fragments of a packet are made equal (at most the link's
 # MTU), so the last one is not a runt that goes as an instant message (on
@@ -37,16 +41,26 @@
 from . import segment as sg
 from .arq import Outgoing
 
+# what a report means for the transfer (ReportedOutgoing.report)
+REPORT_COMPLETE = 1
+REPORT_NEW_ROUND = 2
+REPORT_REPOLL = 3
+
 
 class ReportedOutgoing(Outgoing):
     """An Outgoing on a link whose modem reports the delivery of frames of more than half its MTU."""
 
     reports = True
+    awaiting = 0  # reported fragments whose report is still to come
+    heard = False  # a report of this round said DELIVERED: the modem heard an acknowledgement
 
-    def __init__(self, blob, fragsize, lane, gen, pid):
+    def __init__(self, blob, fragsize, lane, gen, pid, to_destination):
         # segments of at least report_min bytes (index byte included) fill
         # more than half the link's MTU: the modem reports them
         self.report_min = (fragsize + sg.FRAG_HEADER) // 2 + 1
+        # to the packet's destination, the reports are the acknowledgement;
+        # a relay's SACK says whether it took custody (it may be full)
+        self.to_destination = to_destination
         n = len(blob)
         if fragsize > 0 and n > fragsize:
             # as many fragments as the MTU needs, all of one size
@@ -54,9 +68,23 @@ class ReportedOutgoing(Outgoing):
             fragsize = (n + count - 1) // count
         Outgoing.__init__(self, blob, fragsize, lane, gen, pid)
 
+    def fragment(self, index, poll):
+        # to the destination, a fragment the modem reports on asks for no
+        # SACK: its report says whether it arrived
+        if poll and self.to_destination:
+            size = len(self.blob) - index * self.fragsize
+            if size > self.fragsize:
+                size = self.fragsize
+            poll = size + sg.FRAG_HEADER < self.report_min
+        return Outgoing.fragment(self, index, poll)
+
+    def new_round(self):
+        self.heard = False
+        return Outgoing.new_round(self)
+
     def report_wanted(self, nbytes, poll):
         """True when a segment of nbytes (index byte included) is to be confirmed by the modem's report."""
-        return not poll and nbytes >= self.report_min
+        return nbytes >= self.report_min and not poll
 
     def reported(self, index):
         """The modem reported the fragment at index delivered: acknowledged, as by a SACK."""
@@ -64,3 +92,21 @@ class ReportedOutgoing(Outgoing):
             self.acked[index] = 1
             while self.base < self.count and self.acked[self.base]:
                 self.base += 1
+
+    def report(self, index, delivered):
+        """The modem's report on a fragment of a transfer to the destination.
+
+        Returns REPORT_COMPLETE when every fragment is acknowledged, REPORT_NEW_ROUND when
+        the round's reports are all in and say what is missing, REPORT_REPOLL when
+        they are all in and none said DELIVERED (the acknowledgement may be
+        what was lost: a bare poll's SACK tells), or 0 while reports are to come."""
+        self.awaiting -= 1
+        if delivered:
+            self.heard = True
+            self.reported(index)
+            if self.base >= self.count:
+                self.complete = True
+                return REPORT_COMPLETE
+        if self.awaiting > 0 or self.sent_in_round < len(self.round):
+            return 0
+        return REPORT_NEW_ROUND if self.heard else REPORT_REPOLL

@@ -72,7 +72,7 @@ class Transceiver:
         self._train = []  # [counter, dst, nbytes]: bursts of the train, awaiting its ack
         self._train_end = None  # when the train's last burst left
         self._train_wait = None  # the train is closed: its ack is due before this
-        self._heard_bursts = {}  # src -> counters of its bursts heard since our last ack
+        self._heard_bursts = {}  # src -> counters of the last train_max bursts heard from it
         self._ack_due = None  # [due, src]: acknowledge src's train then, unless more arrives
         self._count = 0  # burst counter
 
@@ -176,7 +176,7 @@ class Transceiver:
         if a is not None and ticks_diff(now, a[0]) >= 0 and self.medium.arriving(self.addr, a[1]) is None:
             # the train from a[1] is over: one ack names every burst heard
             self._ack_due = None
-            heard = self._heard_bursts.pop(a[1], [])
+            heard = self._heard_bursts.get(a[1], ())
             self._transmit(now, Packet(P_BACK, self.addr, a[1], False, _counters(heard)), self.airtime(0))
         pd = self._pending
         if pd is not None and ticks_diff(now, pd[2]) >= 0:
@@ -222,8 +222,14 @@ class Transceiver:
             return
         self._report(t, p, dist)
         if mine and p.kind == P_BURST:
-            # the firmware acknowledges the train by itself once it is over
-            self._heard_bursts.setdefault(src, []).append(p.counter)
+            # the firmware acknowledges the train by itself once it is over;
+            # the ack names the last train_max bursts heard from src, not only
+            # those since the last ack: an ack sent early (a lost burst left
+            # a gap) meets the sender on the air, and the next one covers it
+            h = self._heard_bursts.setdefault(src, [])
+            h.append(p.counter)
+            if len(h) > self.train_max:
+                h.pop(0)
             self._ack_due = [ticks_add(t, self.turnaround_ms), src]
         elif mine and p.ack and self._reply is None:
             # the firmware acknowledges by itself
