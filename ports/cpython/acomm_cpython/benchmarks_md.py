@@ -278,7 +278,8 @@ def render(records, machine):
     a("On SeaTrac, whose 30-byte frames each cost a round trip under stop-and-wait, the selective ARQ "
       "moves %s times as much as stop-and-wait without loss and %s times at 20 %% loss. On EvoLogics the "
       "transport hands the modem its bursts one behind the other, the modem sends them as one train and "
-      "its own DELIVERED acknowledges each (docs/transport.md), while stop-and-wait waits for each "
+      "its own DELIVERED and FAILED are the acknowledgement (no SACK per round; docs/transport.md), while "
+      "stop-and-wait waits for each "
       "burst's acknowledgement: %s times as much at 0 %%, %s at 10 %% and %s at 20 %% loss, where "
       "every lost burst costs stop-and-wait the modem's full acknowledgement timeout." % (
           f.s("transfer_arq_over_saw_seatrac_0"), f.s("transfer_arq_over_saw_seatrac_20"),
