@@ -34,8 +34,6 @@ class EvologicsDriver(AcousticDriver):
     of range.
     """
 
-    max_awaiting = MAX_AWAITING  # the link may have this many frames waiting for their report
-
     def __init__(
         self,
         address=None,

@@ -34,6 +34,8 @@ from .txqueue import TxQueue, TxRequest
 _CAP_ADDRESSING = const(1)  # acomm.drivers.caps
 _CAP_DISCOVERY = const(8)  # acomm.drivers.caps
 _CAP_RELIABLE = const(2)  # acomm.drivers.caps
+_CAP_DELIVERY = const(32)  # acomm.drivers.caps
+_MAX_AWAITING = const(8)  # acomm.drivers.evologics: bursts awaiting their report
 _MAX_LIFESPAN_MS = const(0x10000000)  # acomm.link.txqueue
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
@@ -151,11 +153,12 @@ class Link:
             ack_timeout_ms = 2 * driver.caps.latency_ms + 1000
         self.ack_timeout_ms = ack_timeout_ms
         self._fl = _Inflight()
-        # a modem that keeps its own list of frames awaiting their report
-        # (EvoLogics bursts) takes that many in a row: the window must not
-        # hold one of them back until the others' reports
-        w = getattr(driver, "max_awaiting", 0) if self.modem_acks else 0
-        self._acks = AckTable(w if w > ack_window else ack_window)
+        # a modem that reports delivery by itself keeps a list of frames
+        # awaiting their report (EvoLogics bursts) and takes that many in a
+        # row: the window must not hold one back until the others' reports
+        if self.modem_acks and driver.caps.flags & _CAP_DELIVERY and ack_window < _MAX_AWAITING:
+            ack_window = _MAX_AWAITING
+        self._acks = AckTable(ack_window)
         self._dups = DuplicateFilter(dup_window_ms)
         self._active = {}  # req_id -> TxRequest, accepted and not yet final
         self._seqs = {}  # destination id (None: broadcast) -> next sequence number

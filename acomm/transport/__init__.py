@@ -82,6 +82,7 @@ _F_POLL = const(1)  # it carries the round's poll
 _F_REPORTED = const(2)  # the modem reports its delivery (acomm.transport.delivery)
 _F_LEFT = const(4)  # reported, and it has left the modem: its report is to come
 # what a report means for the transfer (acomm.transport.delivery)
+_REPORTS_ACK = const(2)  # Outgoing.reports: the reports are the acknowledgement
 _REPORT_COMPLETE = const(1)
 _REPORT_NEW_ROUND = const(2)
 _REPORT_REPOLL = const(3)
@@ -385,7 +386,7 @@ class Transport:
             self._request(p, now, o.repoll())
             return
         while p.inflight < _PIPELINE and not held:
-            if o.sent_in_round == len(o.round) - 1 and p.inflight and not (o.reports and o.to_destination):
+            if o.sent_in_round == len(o.round) - 1 and p.inflight and o.reports != _REPORTS_ACK:
                 # the poll goes last: the link queue may reorder, and a
                 # fragment after the poll would be on the air (deaf, half-
                 # duplex) when the SACK comes back
@@ -412,8 +413,6 @@ class Transport:
         if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, ack=rep, retries=0,
                           ftype=_SEGMENT, seq=head):
             self._reqs[rid] = (p, index, (_F_POLL if poll else 0) | (_F_REPORTED if rep else 0))
-            if rep:
-                p.out.awaiting += 1
             p.inflight += 1
             if poll:
                 p.polling += 1
@@ -441,19 +440,20 @@ class Transport:
             p.inflight -= 1
         o = p.out
         if f & _F_REPORTED:
-            if o is None:
-                return True
-            if o.to_destination:
-                # the modem's reports are the acknowledgement
-                a = o.report(index, status == _DELIVERED)
+            if o is not None:
+                # the modem's report (acomm.transport.delivery): are others to come?
+                more = False
+                for q in self._reqs.values():
+                    if q[0] is p and q[2] & _F_REPORTED:
+                        more = True
+                        break
+                a = o.reported(index, status == _DELIVERED, more)
                 if a == _REPORT_COMPLETE:
                     self._final(now, p, _DELIVERED, "")
                 elif a == _REPORT_NEW_ROUND:
                     o.new_round()
                 elif a == _REPORT_REPOLL:
                     p.timer = now
-            elif status == _DELIVERED:
-                o.reported(index)  # to a relay: its SACK completes the transfer
             return True
         if f & _F_POLL:
             p.polling -= 1

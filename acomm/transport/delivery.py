@@ -41,7 +41,10 @@
 from . import segment as sg
 from .arq import Outgoing
 
-# what a report means for the transfer (ReportedOutgoing.report)
+# ReportedOutgoing.reports: 1 the reports acknowledge fragments, 2 they are
+# the acknowledgement (to the packet's destination)
+REPORTS_ACK = 2
+# what a report means for the transfer (ReportedOutgoing.reported)
 REPORT_COMPLETE = 1
 REPORT_NEW_ROUND = 2
 REPORT_REPOLL = 3
@@ -50,8 +53,7 @@ REPORT_REPOLL = 3
 class ReportedOutgoing(Outgoing):
     """An Outgoing on a link whose modem reports the delivery of frames of more than half its MTU."""
 
-    reports = True
-    awaiting = 0  # reported fragments whose report is still to come
+    reports = 1
     heard = False  # a report of this round said DELIVERED: the modem heard an acknowledgement
 
     def __init__(self, blob, fragsize, lane, gen, pid, to_destination):
@@ -61,6 +63,8 @@ class ReportedOutgoing(Outgoing):
         # to the packet's destination, the reports are the acknowledgement;
         # a relay's SACK says whether it took custody (it may be full)
         self.to_destination = to_destination
+        if to_destination:
+            self.reports = REPORTS_ACK
         n = len(blob)
         if fragsize > 0 and n > fragsize:
             # as many fragments as the MTU needs, all of one size
@@ -86,27 +90,27 @@ class ReportedOutgoing(Outgoing):
         """True when a segment of nbytes (index byte included) is to be confirmed by the modem's report."""
         return nbytes >= self.report_min and not poll
 
-    def reported(self, index):
-        """The modem reported the fragment at index delivered: acknowledged, as by a SACK."""
-        if 0 <= index < self.count and not self.complete:
+    def reported(self, index, delivered, more):
+        """The modem's report on the fragment at index; more: other reports of this transfer are to come.
+
+        DELIVERED acknowledges the fragment, as if a SACK had listed it. To
+        a relay that is all (its SACK completes the transfer) and this
+        returns 0. To the destination it returns REPORT_COMPLETE when every
+        fragment is acknowledged; once the round is sent and its reports
+        are all in, REPORT_NEW_ROUND when one said DELIVERED (the modem
+        heard the acknowledgement: the FAILED ones are missing) and
+        REPORT_REPOLL when none did (the acknowledgement may be what was
+        lost: a bare poll's SACK tells); otherwise 0."""
+        if delivered and 0 <= index < self.count and not self.complete:
+            self.heard = True
             self.acked[index] = 1
             while self.base < self.count and self.acked[self.base]:
                 self.base += 1
-
-    def report(self, index, delivered):
-        """The modem's report on a fragment of a transfer to the destination.
-
-        Returns REPORT_COMPLETE when every fragment is acknowledged, REPORT_NEW_ROUND when
-        the round's reports are all in and say what is missing, REPORT_REPOLL when
-        they are all in and none said DELIVERED (the acknowledgement may be
-        what was lost: a bare poll's SACK tells), or 0 while reports are to come."""
-        self.awaiting -= 1
-        if delivered:
-            self.heard = True
-            self.reported(index)
-            if self.base >= self.count:
-                self.complete = True
-                return REPORT_COMPLETE
-        if self.awaiting > 0 or self.sent_in_round < len(self.round):
+        if not self.to_destination:
+            return 0
+        if self.base >= self.count:
+            self.complete = True
+            return REPORT_COMPLETE
+        if more or self.sent_in_round < len(self.round):
             return 0
         return REPORT_NEW_ROUND if self.heard else REPORT_REPOLL

@@ -33,12 +33,11 @@ def test_reported_fragments_are_equal_and_to_the_destination_the_reports_acknowl
     assert _round(o) == [(i, False, 821) for i in range(5)]
     assert o.report_min == 512 and o.report_wanted(821, False) and o.report_wanted(512, False)
     assert not o.report_wanted(511, False)
-    o.awaiting = 5
     # a report is not the round's end while others are to come
-    assert [o.report(i, i != 2) for i in (0, 1, 2, 3)] == [0, 0, 0, 0]
+    assert [o.reported(i, i != 2, True) for i in (0, 1, 2, 3)] == [0, 0, 0, 0]
     assert o.base == 2 and not o.complete
     # the last report is in: DELIVERED ones were heard, so 2 is missing
-    assert o.report(4, True) == REPORT_NEW_ROUND
+    assert o.reported(4, True, False) == REPORT_NEW_ROUND
     assert o.base == 2 and list(o.acked) == [1, 1, 0, 1, 1]
 
 
@@ -46,17 +45,18 @@ def test_the_reports_of_a_round_decide_the_next_one():
     o = ReportedOutgoing(bytes(3000), 1022, 0, 0, 7, True)
     o.new_round()
     assert len(_round(o)) == 3
-    o.awaiting = 3
-    assert [o.report(0, True), o.report(1, False), o.report(2, True)] == [0, 0, REPORT_NEW_ROUND]
+    assert [o.reported(0, True, True), o.reported(1, False, True), o.reported(2, True, False)] == [0, 0,
+                                                                                             REPORT_NEW_ROUND]
     assert o.new_round() == [1] and _round(o) == [(1, False, 1001)]
-    o.awaiting = 1
     # the last one FAILED, and nothing else in the round was heard: the
     # modem's acknowledgement may be what was lost, a bare poll asks
-    assert o.report(1, False) == REPORT_REPOLL
+    assert o.reported(1, False, False) == REPORT_REPOLL
     assert o.repoll()[0] == 1 and sg.is_poll(o.repoll()[1])
     o.new_round()
-    o.awaiting = 1
-    assert o.report(1, True) == REPORT_COMPLETE and o.complete and o.base == 3
+    # a report while the round is still being sent is not its end
+    assert o.reported(1, False, False) == 0
+    _round(o)
+    assert o.reported(1, True, False) == REPORT_COMPLETE and o.complete and o.base == 3
     # a packet of one short fragment is not reported: it asks for a SACK
     o = ReportedOutgoing(bytes(300), 1022, 0, 0, 7, True)
     o.new_round()
@@ -70,14 +70,16 @@ def test_to_a_relay_the_poll_is_not_reported_and_the_sack_completes():
     # it took custody (it may be full)
     assert [f[1] for f in _round(o)] == [False] * 4 + [True]
     assert o.report_wanted(821, False) and not o.report_wanted(821, True)
-    o.reported(1)
-    o.reported(1)  # twice: no matter
+    o.reported(1, True, True)
+    assert o.reported(1, True, True) == 0  # twice: no matter
     assert o.base == 0 and o.acked[1]
-    o.reported(0)
-    o.reported(2)
-    o.reported(3)
-    assert o.base == 4 and not o.complete
-    o.reported(9)  # no such fragment: ignored
+    o.reported(0, True, True)
+    o.reported(2, True, True)
+    o.reported(3, False, True)
+    assert o.base == 3 and not o.acked[3]
+    # to a relay, reports never end a round or the transfer
+    assert o.reported(3, True, False) == 0 and o.base == 4 and not o.complete
+    o.reported(9, True, False)  # no such fragment: ignored
     # the SACK is the authority: it says the relay lacks 2 and 3 (its
     # reassembly was dropped) though the modem reported them: they go again
     s = sg.decode(*sg.sack(0, 0, 2, b"\x02"))

@@ -29,7 +29,9 @@ SCOPED = {
     "acomm.link.txqueue": (("link/__init__.py", "link/ranging.py"), ("MAX_LIFESPAN_MS",)),
     "acomm.frame": (("transport/__init__.py",), ("SEGMENT",)),
     "acomm.transport.packetstore": (("transport/__init__.py",), ("DONE_MEMORY",)),
-    "acomm.transport.delivery": (("transport/__init__.py",), ("REPORT_COMPLETE", "REPORT_NEW_ROUND", "REPORT_REPOLL")),
+    "acomm.transport.delivery": (("transport/__init__.py",), ("REPORTS_ACK", "REPORT_COMPLETE", "REPORT_NEW_ROUND",
+                                                          "REPORT_REPOLL")),
+    "acomm.drivers.evologics": (("link/__init__.py",), ("MAX_AWAITING",)),
 }
 # the same for copies of a module's private constants (attributes on CPython)
 PRIVATE_SCOPED = {
