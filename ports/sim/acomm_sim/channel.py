@@ -136,9 +136,10 @@ class Channel(Medium):
         # when that cannot be known once for all (moving nodes, no such
         # curve). Every other station loses src's packets for sure. ->
         # ({dst: True} within reach, ((stations out of reach before it,
-        # dst), ...) in the stations' order, out of reach after the last,
-        # out of reach in all); kept per source until a position, distance
-        # or station changes.
+        # dst, distance, the curve's loss as Prng.chance compares it), ...)
+        # in the stations' order, out of reach after the last, out of reach
+        # in all); kept per source until a position, distance or station
+        # changes (a distance and its loss then stay what they were).
         curve = self.loss_curve
         if self._tracks or curve is None or curve[-1][1] < 1.0:
             return None
@@ -146,7 +147,13 @@ class Channel(Medium):
         if near is None:
             lim = curve[-1][0]
             cand = self._candidates(src, lim)
-            within = {dst: True for dst in cand if dst != src and self.distance(src, dst) < lim}
+            dist = {}
+            for dst in cand:
+                if dst != src:
+                    d = self.distance(src, dst)
+                    if d < lim:
+                        dist[dst] = d
+            within = {dst: True for dst in dist}
             # and, in the stations' order, how many out of reach come
             # before each one within it, and after the last: from the
             # stations' places, without walking all of them for each source
@@ -157,7 +164,9 @@ class Channel(Medium):
             steps = []
             prev = -1
             for i, dst in sorted((place[dst], dst) for dst in within):
-                steps.append((i - prev - 1 - (1 if prev < me < i else 0), dst))
+                d = dist[dst]
+                p = int(interpolate(curve, d) * 0x100000000)
+                steps.append((i - prev - 1 - (1 if prev < me < i else 0), dst, d, p))
                 prev = i
             last = len(self._stations) - prev - 2 + (1 if me < prev else 0)
             near = (within, tuple(steps), last, len(self._stations) - 1 - len(steps))
@@ -235,12 +244,15 @@ class Channel(Medium):
         rng = self.rng
         if not self.loss:
             # out of reach: one draw each (the curve's, certain), skipped
-            # (prngskip) and counted
-            for k, dst in near[1]:
+            # (prngskip) and counted; in reach: _lost_on_the_way without a
+            # fixed loss (the curve's draw, rng.chance(p) as next32() < p
+            # * 2**32), on the distance and loss kept with the reach
+            nxt = rng.next32
+            for k, dst, d, p in near[1]:
                 if k:
                     skip(rng, k)
-                d = self.distance(src, dst)
-                if self._lost_on_the_way(d):
+                if nxt() < p:
+                    self.range_lost += 1
                     continue
                 self._fly(now, end, src, dst, packet, d)
             if near[2]:

@@ -15,8 +15,11 @@
 # arrival time of the packet's end, which may be a little before `now` when
 # poll() runs in steps. Portable Python: runs on the MicroPython unix port.
 
-from acomm.compat import ticks_add, ticks_diff
+from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.prng import Prng
+
+_MAX = TICKS_MAX
+_HALF = (TICKS_MAX + 1) >> 1  # compat.ticks_diff's half period
 
 _TX_HISTORY = 4  # transmissions remembered per station, for half-duplex
 
@@ -112,13 +115,18 @@ class Medium:
             b = self._bound[dst] = {}
         b[self._seq] = item
         f = self._flight
-        # after every copy arriving at or before it (a binary search: a
-        # large network has many copies on their way)
+        # after every copy arriving at or before it: most often the last
+        # (copies sent later arrive later, give or take the distance), else
+        # found by a binary search (a large network has many copies on
+        # their way), with ticks_diff(a, t) > 0 as its arithmetic
         t = item[0]
-        lo, hi = 0, len(f)
+        if not f or ((f[-1][0] - t + _HALF) & _MAX) - _HALF <= 0:
+            f.append(item)
+            return
+        lo, hi = 0, len(f) - 1
         while lo < hi:
             mid = (lo + hi) >> 1
-            if ticks_diff(f[mid][0], t) > 0:
+            if ((f[mid][0] - t + _HALF) & _MAX) - _HALF > 0:
                 hi = mid
             else:
                 lo = mid + 1

@@ -143,6 +143,25 @@ def _index(sn):
     return sn.index
 
 
+def _join_active(active, sn):
+    # sn into the active list, which is in World._order, at its place: a
+    # node or two wake at a time, and sorting the whole list for them
+    # (a key call per node) cost more the larger the network
+    i = sn.index
+    hi = len(active)
+    if not hi or active[hi - 1].index < i:
+        active.append(sn)
+        return
+    lo = 0
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if active[mid].index < i:
+            lo = mid + 1
+        else:
+            hi = mid
+    active.insert(lo, sn)
+
+
 def _node_quiet(now, sn):
     if not _modem_quiet(now, sn.emu, sn.host_end, sn.modem_end):
         return False
@@ -412,8 +431,10 @@ class World:
                 return
             heapq.heappop(self._sleeping)
             sn.asleep = False
-            self._active.append(sn)
-            self._sorted = False
+            if self._sorted:
+                _join_active(self._active, sn)
+            else:
+                self._active.append(sn)
 
     def _extra_bytes(self, sn):
         for x in sn.extra:
@@ -489,8 +510,10 @@ class World:
                 sn = self._by_station.get(id(emu))
                 if sn is not None and sn.asleep:
                     sn.asleep = False
-                    active.append(sn)
-                    self._sorted = False
+                    if self._sorted:
+                        _join_active(active, sn)
+                    else:
+                        active.append(sn)
             del heard[:]
             if not self._sorted:
                 active.sort(key=_index)
