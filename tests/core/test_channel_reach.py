@@ -3,7 +3,8 @@
 # changes nothing: the same transmissions give the same deliveries, the
 # same counters and the same generator state as on a Channel that works
 # out every distance. Stationary nodes on a grid and scattered, nodes
-# without a position, a node that moves; with and without a fixed loss.
+# without a position, a node that moves, a loss curve replaced; with and
+# without a fixed loss.
 from acomm.prng import Prng
 from acomm_sim.channel import Channel, Track
 
@@ -48,6 +49,9 @@ def _run(cls, seed, layout, loss, n=24):
             # a station leaves and comes back: it is last in the stations' order now
             ch.detach(2)
             ch.attach(2, Ear(log, 2))
+        if k == 100 and layout == "grid":
+            # a new loss curve, shorter: the reach kept for the old one is stale
+            ch.loss_curve = ((0.0, 0.0), (200.0, 0.5), (260.0, 1.0))
     ch.poll(t + 100000)
     return log, [getattr(ch, c) for c in ("sent", "delivered", "lost", "range_lost", "collided", "deaf")], ch.rng.next32()
 

@@ -86,6 +86,7 @@ class Channel(Medium):
         self._now = now
         self._tracks = {}
         self._near = {}  # src -> reach (_near_of)
+        self._near_curve = None  # the loss curve _near was worked out for
         self._grid = None  # (square east, square north) -> [addr] (_candidates)
         self._place = None  # addr -> its place in the stations' order (_near_of)
         self._bursts = []  # (start, end, receiver or None)
@@ -143,6 +144,11 @@ class Channel(Medium):
         curve = self.loss_curve
         if self._tracks or curve is None or curve[-1][1] < 1.0:
             return None
+        if curve is not self._near_curve:
+            # a curve assigned since: what was kept holds the old one's reach and losses
+            self._near = {}
+            self._grid = None
+            self._near_curve = curve
         near = self._near.get(src)
         if near is None:
             lim = curve[-1][0]
