@@ -62,7 +62,6 @@ class ReportedOutgoing(Outgoing):
         self.report_min = (fragsize + sg.FRAG_HEADER) // 2 + 1
         # to the packet's destination, the reports are the acknowledgement;
         # a relay's SACK says whether it took custody (it may be full)
-        self.to_destination = to_destination
         if to_destination:
             self.reports = REPORTS_ACK
         n = len(blob)
@@ -75,7 +74,7 @@ class ReportedOutgoing(Outgoing):
     def fragment(self, index, poll):
         # to the destination, a fragment the modem reports on asks for no
         # SACK: its report says whether it arrived
-        if poll and self.to_destination:
+        if poll and self.reports == REPORTS_ACK:
             size = len(self.blob) - index * self.fragsize
             if size > self.fragsize:
                 size = self.fragsize
@@ -106,7 +105,7 @@ class ReportedOutgoing(Outgoing):
             self.acked[index] = 1
             while self.base < self.count and self.acked[self.base]:
                 self.base += 1
-        if not self.to_destination:
+        if self.reports != REPORTS_ACK:
             return 0
         if self.base >= self.count:
             self.complete = True

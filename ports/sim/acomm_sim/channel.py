@@ -136,7 +136,7 @@ class Channel(Medium):
         # certain (its last point, when that point's loss is 1), or None
         # when that cannot be known once for all (moving nodes, no such
         # curve). Every other station loses src's packets for sure. ->
-        # ({dst: True} within reach, ((stations out of reach before it,
+        # ({dst: distance} within reach, ((stations out of reach before it,
         # dst, distance, the curve's loss as Prng.chance compares it), ...)
         # in the stations' order, out of reach after the last, out of reach
         # in all); kept per source until a position, distance or station
@@ -159,7 +159,6 @@ class Channel(Medium):
                     d = self.distance(src, dst)
                     if d < lim:
                         dist[dst] = d
-            within = {dst: True for dst in dist}
             # and, in the stations' order, how many out of reach come
             # before each one within it, and after the last: from the
             # stations' places, without walking all of them for each source
@@ -169,13 +168,13 @@ class Channel(Medium):
             me = place[src]
             steps = []
             prev = -1
-            for i, dst in sorted((place[dst], dst) for dst in within):
+            for i, dst in sorted((place[dst], dst) for dst in dist):
                 d = dist[dst]
                 p = int(interpolate(curve, d) * 0x100000000)
                 steps.append((i - prev - 1 - (1 if prev < me < i else 0), dst, d, p))
                 prev = i
             last = len(self._stations) - prev - 2 + (1 if me < prev else 0)
-            near = (within, tuple(steps), last, len(self._stations) - 1 - len(steps))
+            near = (dist, tuple(steps), last, len(self._stations) - 1 - len(steps))
             self._near[src] = near
         return near
 
@@ -276,7 +275,7 @@ class Channel(Medium):
                     rng.next32()
                     self.range_lost += 1
                 continue
-            d = self.distance(src, dst)
+            d = within[dst]  # kept with the reach
             if self._lost_on_the_way(d):
                 continue
             self._fly(now, end, src, dst, packet, d)

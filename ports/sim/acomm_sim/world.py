@@ -390,9 +390,16 @@ class World:
         """Steps node `sn` at the next step (after its state was changed from outside)."""
         sn.wake = None
         if sn.asleep:
-            sn.asleep = False
+            self._activate(sn)
+
+    def _activate(self, sn):
+        # a sleeping node back on the active list: at its place when the
+        # list is in order, else at its end until the next sort
+        sn.asleep = False
+        if self._sorted:
+            _join_active(self._active, sn)
+        else:
             self._active.append(sn)
-            self._sorted = False
 
     def _wake_all(self):
         for sn in self._order:
@@ -430,11 +437,7 @@ class World:
             if sn is None or ticks_diff(now, sn.sleep_wake) < 0:
                 return
             heapq.heappop(self._sleeping)
-            sn.asleep = False
-            if self._sorted:
-                _join_active(self._active, sn)
-            else:
-                self._active.append(sn)
+            self._activate(sn)
 
     def _extra_bytes(self, sn):
         for x in sn.extra:
@@ -509,11 +512,7 @@ class World:
             for emu in heard:
                 sn = self._by_station.get(id(emu))
                 if sn is not None and sn.asleep:
-                    sn.asleep = False
-                    if self._sorted:
-                        _join_active(active, sn)
-                    else:
-                        active.append(sn)
+                    self._activate(sn)
             del heard[:]
             if not self._sorted:
                 active.sort(key=_index)
