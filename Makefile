@@ -49,7 +49,7 @@ test: $(VENV)/.dev
 	PATH="$(CURDIR)/$(BIN):$$PATH" $(BIN)/micropython tools/mp_runtests.py tests/core; b=$$?; \
 	c=0; d=0; \
 	if [ $$f -eq 0 ]; then \
-	  $(BIN)/python tools/qemu_runtests.py; c=$$?; \
+	  $(BIN)/python tools/board_runtests.py; c=$$?; \
 	  build/firmware/micropython-i386 -X heapsize=$(I386_HEAP) tools/mp_runtests.py --frozen --name micropython-i386 tests/core; d=$$?; \
 	elif [ $$f -eq 3 ]; then \
 	  echo "micropython-cortex-m3, micropython-i386: skipped: the firmware cannot be built here (the firmware: line above says what is missing; then run make firmware)"; \
@@ -59,7 +59,7 @@ test: $(VENV)/.dev
 	test $$a -eq 0 && test $$b -eq 0 && test $$c -eq 0 && test $$d -eq 0 && test $$f -ne 1
 
 test-firmware: firmware
-	$(BIN)/python tools/qemu_runtests.py
+	$(BIN)/python tools/board_runtests.py
 	build/firmware/micropython-i386 -X heapsize=$(I386_HEAP) tools/mp_runtests.py --frozen --name micropython-i386 tests/core
 
 test-cpython: $(VENV)/.dev

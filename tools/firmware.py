@@ -14,19 +14,32 @@
 #                   ROMFS and .mpy heap figures run the buoy's files on it,
 #                   so that they count the buoy and not the harness
 #   micropython-i386  the unix port built for i386 (-m32), full manifest
+#   rp2040-stock.uf2  MicroPython's own RPI_PICO firmware (the board's own
+#                   manifest, what a user downloads): `acomm flash` copies
+#                   the buoy's .mpy files to it
+#   buoy_pico.uf2   the same with the buoy's import closure frozen in
+#                   (ports/micropython/manifests/buoy_pico.py, which extends
+#                   the board's manifest): the Pico's production image
+#   rp2040-full.uf2 every module of acomm and acomm_mp and the footprint
+#                   harness frozen: the core suite and the frozen heap
+#                   figures run on it in the RP2040 emulator
+#                   (each rp2040 product also leaves its .elf beside it)
 #   mpy-cross       the matching cross compiler
 #
 #   python3 tools/firmware.py build [--only NAME]   build what is stale
 #   python3 tools/firmware.py check                 exit 0 when a build can
 #                   run here, else print one line saying what is missing
 #
-# The MicroPython source: $MPY_DIR (a checkout of micropython/micropython;
-# tested with v1.29.0-preview 1c3c201149), else the subset tarball in
-# ../shared/vendor/ next to the repository, else a shallow git clone where
-# the network allows it. The build never writes into that tree: it makes a
-# shadow tree in build/mpy-src/ (links to py/, extmod/, shared/, lib/,
-# tools/; copies of mpy-cross/ and the two ports) and applies the project's
-# patch (ports/micropython/firmware/qemu-mps2.patch) to the copy.
+# The MicroPython source, one release for every product: $MPY_DIR (a
+# checkout of micropython/micropython at v1.28.0 with the submodules rp2
+# needs: lib/pico-sdk, lib/tinyusb, lib/micropython-lib), else the v1.28.0
+# tarball in ../shared/vendor/ next to the repository (or $ACOMM_SHARED/vendor),
+# else a shallow git clone of v1.28.0 and those submodules where the network
+# allows it. The build never writes into that tree: it makes a shadow tree
+# in build/mpy-src/ (links to py/, extmod/, shared/, lib/, tools/; copies of
+# mpy-cross/ and the three ports) and applies the project's patch
+# (ports/micropython/firmware/qemu-mps2.patch) to its copy of the qemu port.
+# The rp2 port is not patched: the Pico runs MicroPython's own code.
 #
 # Each product is rebuilt only when its key changes: a hash of the
 # MicroPython source's identity and of every file that goes into it.
@@ -46,9 +59,11 @@ BUILD = os.path.join(ROOT, "build")
 OUT = os.path.join(BUILD, "firmware")
 FW = os.path.join(ROOT, "ports", "micropython", "firmware")
 PATCH = os.path.join(FW, "qemu-mps2.patch")
-TESTED = "v1.29.0-preview (1c3c201149)"
+TESTED = "v1.28.0"
 GIT_URL = "https://github.com/micropython/micropython"
-APT = ("gcc-arm-none-eabi", "libnewlib-arm-none-eabi", "qemu-system-arm", "gcc-multilib")
+# the release's own tarball in shared/vendor (with the submodules rp2 pins)
+VENDOR_GLOB = "micropython-v1.28.0*.tar.gz"
+RP2_SUBMODULES = ("lib/pico-sdk", "lib/tinyusb", "lib/micropython-lib")
 # The largest heap the qemu builds can be given; a smaller one is set at
 # boot (ports/micropython/firmware/qemu-mps2.patch), so one build serves
 # the test suite (big heap) and the footprint bisection (small ones).
@@ -64,7 +79,12 @@ PRODUCTS = {
     "cm3-full": ("qemu", ("boot", "full", "harness")),
     "cm3-harness": ("qemu", ("boot", "asyncio", "harness")),
     "micropython-i386": ("unix", ("full", "harness")),
+    "rp2040-stock": ("rp2", ("rp2port",)),
+    "buoy_pico": ("rp2", ("board:buoy_pico",)),
+    "rp2040-full": ("rp2", ("full", "harness")),
 }
+# what a product leaves in build/firmware/, by port
+SUFFIX = {"qemu": ".elf", "unix": "", "rp2": ".uf2"}
 
 
 class Missing(Exception):
@@ -81,7 +101,7 @@ def say(msg):
 def _vendor_tarball():
     for d in (os.environ.get("ACOMM_SHARED"), os.path.join(os.path.dirname(ROOT), "shared")):
         if d:
-            hits = sorted(glob.glob(os.path.join(d, "vendor", "micropython-*.tar.gz")))
+            hits = sorted(glob.glob(os.path.join(d, "vendor", VENDOR_GLOB)))
             if hits:
                 return hits[-1]
     return None
@@ -123,10 +143,13 @@ def source():
     if not os.path.isfile(os.path.join(dest, "py", "mpconfig.h")):
         if shutil.which("git") is None:
             raise Missing("no MicroPython source: set MPY_DIR to a checkout of %s" % GIT_URL)
-        say("cloning %s (no MPY_DIR, no vendored tarball)" % GIT_URL)
+        say("cloning %s %s (no MPY_DIR, no vendored tarball)" % (GIT_URL, TESTED))
         shutil.rmtree(dest, ignore_errors=True)
-        r = subprocess.run(["git", "clone", "-q", "--depth", "1", GIT_URL, dest], capture_output=True, text=True,
-                           timeout=300)
+        r = subprocess.run(["git", "clone", "-q", "--depth", "1", "--branch", TESTED, GIT_URL, dest],
+                           capture_output=True, text=True, timeout=300)
+        if r.returncode == 0:
+            r = subprocess.run(["git", "-C", dest, "submodule", "update", "-q", "--init", "--depth", "1"]
+                               + list(RP2_SUBMODULES), capture_output=True, text=True, timeout=900)
         if r.returncode != 0:
             shutil.rmtree(dest, ignore_errors=True)
             raise Missing("no MicroPython source: set MPY_DIR to a checkout of %s (cloning it failed: %s)"
@@ -149,7 +172,9 @@ def shadow(src, ident):
             os.symlink(os.path.join(src, d), os.path.join(dest, d))
     ign = shutil.ignore_patterns("build", "build-*")
     shutil.copytree(os.path.join(src, "mpy-cross"), os.path.join(dest, "mpy-cross"), ignore=ign, symlinks=True)
-    for port in ("qemu", "unix"):
+    for port in ("qemu", "unix", "rp2"):
+        if port == "rp2" and not os.path.isdir(os.path.join(src, "ports", port)):
+            continue  # said by build_rp2, which needs it
         shutil.copytree(os.path.join(src, "ports", port), os.path.join(dest, "ports", port), ignore=ign, symlinks=True)
     r = subprocess.run(["patch", "-p1", "-s", "-N", "-d", os.path.join(dest, "ports"), "-i", PATCH],
                        capture_output=True, text=True)
@@ -174,11 +199,16 @@ def _missing_tools():
         libc = subprocess.run(["arm-none-eabi-gcc", "-print-file-name=libc.a"], capture_output=True, text=True).stdout
         if not os.path.isabs(libc.strip()):
             miss.append("libnewlib-arm-none-eabi")
+        # the pico-sdk has C++ parts (rp2 builds)
+        cxx = subprocess.run(["arm-none-eabi-gcc", "-print-file-name=libstdc++.a"], capture_output=True,
+                             text=True).stdout
+        if not os.path.isabs(cxx.strip()):
+            miss.append("libstdc++-arm-none-eabi-newlib")
     if shutil.which("qemu-system-arm") is None:
         miss.append("qemu-system-arm")
     if not glob.glob("/usr/lib/gcc/*/*/32/libgcc.a"):
         miss.append("gcc-multilib")
-    for tool, pkg in (("make", "make"), ("gcc", "gcc"), ("patch", "patch")):
+    for tool, pkg in (("make", "make"), ("gcc", "gcc"), ("patch", "patch"), ("cmake", "cmake")):
         if shutil.which(tool) is None:
             miss.append(pkg)
     return miss
@@ -213,6 +243,9 @@ def _manifest(parts):
     for p in parts:
         if p == "boot":
             lines.append("freeze(%r, %r)" % (FW, "_boot.py"))
+        elif p == "rp2port":
+            # exactly what MicroPython's own RPI_PICO firmware freezes
+            lines.append('include("$(PORT_DIR)/boards/manifest.py")')
         elif p == "asyncio":
             lines.append('include("$(MPY_DIR)/extmod/asyncio")')
         elif p == "full":
@@ -245,11 +278,15 @@ def key(ident):
     return h.hexdigest()
 
 
+def _out(name):
+    return os.path.join(OUT, name + (SUFFIX[PRODUCTS[name][0]] if name in PRODUCTS else ""))
+
+
 def _fresh(name, k):
     path = os.path.join(OUT, name + ".key")
     try:
         with open(path) as f:
-            return f.read().strip() == k and os.path.exists(os.path.join(OUT, name + ("" if name.startswith("micro") else ".elf")))
+            return f.read().strip() == k and os.path.exists(_out(name))
     except OSError:
         return False
 
@@ -288,9 +325,9 @@ def build_mpy_cross(tree):
 def build_qemu(tree, name, parts):
     work, args = _make_common(tree, name, parts)
     cmd = ["make", "-C", os.path.join(tree, "ports", "qemu"), "-j" + JOBS, "BOARD=MPS2_AN385",
-           "MICROPY_VFS_LFS2=1", "MICROPY_HEAP_SIZE=%d" % QEMU_HEAP, "MICROPY_STACK_SIZE=16384",
+           "MICROPY_VFS_LFS2=1", "MICROPY_HEAP_SIZE=%d" % QEMU_HEAP,
            # asyncio as on a board; 1-byte qstr hashes as rp2 has them
-           "CFLAGS_EXTRA=-DMICROPY_PY_ASYNCIO=1 -DMICROPY_QSTR_BYTES_IN_HASH=1"] + args
+           "CFLAGS_EXTRA=-DMICROPY_PY_ASYNCIO=1 -DMICROPY_QSTR_BYTES_IN_HASH=1 -DMICROPY_STACK_SIZE=16384"] + args
     _run(cmd, os.path.join(work, "make.log"))
     shutil.copyfile(os.path.join(work, "build", "firmware.elf"), os.path.join(OUT, name + ".elf"))
 
@@ -304,6 +341,45 @@ def build_unix32(tree, name, parts):
     _run(cmd, os.path.join(work, "make.log"))
     shutil.copyfile(os.path.join(work, "build", "micropython"), os.path.join(OUT, name))
     os.chmod(os.path.join(OUT, name), 0o755)
+
+
+def build_rp2(tree, name, parts):
+    # One CMake build folder serves every rp2 product: the C objects are the
+    # same, so after the first product only the frozen code is compiled
+    # again (makemanifest.py keeps frozen_content.c while its inputs are
+    # older than it, whatever the manifest: hence the delete). picotool is
+    # not used (the SDK would download it): tools/uf2.py writes the UF2.
+    port = os.path.join(tree, "ports", "rp2")
+    if not os.path.isfile(os.path.join(tree, "lib", "pico-sdk", "README.md")):
+        raise Missing("the MicroPython source has no lib/pico-sdk (rp2 needs %s: git submodule update --init %s)"
+                      % (", ".join(RP2_SUBMODULES), " ".join(RP2_SUBMODULES)))
+    work, _ = _make_common(tree, name, parts)
+    bdir = os.path.join(OUT, "work", "rp2-RPI_PICO")
+    log = os.path.join(work, "make.log")
+    _run(["cmake", "-S", port, "-B", bdir, "-DPICO_BUILD_DOCS=0", "-DMICROPY_BOARD=RPI_PICO",
+          "-DMICROPY_BOARD_DIR=" + os.path.join(port, "boards", "RPI_PICO"), "-DPICO_NO_PICOTOOL=1",
+          "-DMICROPY_FROZEN_MANIFEST=" + os.path.join(work, "manifest.py")], os.path.join(work, "cmake.log"))
+    try:
+        os.remove(os.path.join(bdir, "frozen_content.c"))
+    except OSError:
+        pass
+    _run(["make", "-C", bdir, "-j" + JOBS], log)
+    shutil.copyfile(os.path.join(bdir, "firmware.elf"), os.path.join(OUT, name + ".elf"))
+    # kept per product, as the other ports' builds keep theirs (the folder
+    # is shared): what each image froze is read from it
+    os.makedirs(os.path.join(work, "build"), exist_ok=True)
+    shutil.copyfile(os.path.join(bdir, "frozen_content.c"), os.path.join(work, "build", "frozen_content.c"))
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import uf2
+
+    with open(os.path.join(bdir, "firmware.bin"), "rb") as f:
+        image = f.read()
+    with open(_out(name) + ".tmp", "wb") as f:
+        f.write(uf2.write(image))
+    os.replace(_out(name) + ".tmp", _out(name))
+
+
+BUILDERS = {"qemu": build_qemu, "unix": build_unix32, "rp2": build_rp2}
 
 
 def build(only=None, install=True):
@@ -326,7 +402,7 @@ def build(only=None, install=True):
         if _fresh(name, k):
             continue
         say("building %s" % name)
-        (build_qemu if port == "qemu" else build_unix32)(tree, name, parts)
+        BUILDERS[port](tree, name, parts)
         with open(os.path.join(OUT, name + ".key"), "w") as f:
             f.write(k)
     return OUT
@@ -334,7 +410,7 @@ def build(only=None, install=True):
 
 def product(name):
     """Path of a built product, or None when it is not built for the current sources."""
-    path = os.path.join(OUT, name + ("" if name.startswith(("micro", "mpy")) else ".elf"))
+    path = _out(name) if name in PRODUCTS else os.path.join(OUT, name)
     return path if os.path.exists(path) else None
 
 

@@ -46,7 +46,7 @@ def need_double(what):
 
 def tmp_root():
     # /tmp, made when the filesystem has none (a board's littlefs at "/",
-    # as on the Cortex-M3 firmware of tools/qemu_runtests.py)
+    # as on the Cortex-M3 firmware of tools/board_runtests.py)
     import os
 
     try:

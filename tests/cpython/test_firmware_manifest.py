@@ -1,7 +1,8 @@
 # What the firmware builds froze (tools/firmware.py, `make firmware`): the
 # full manifest freezes every module of acomm and acomm_mp, on the Cortex-M3
-# and on the i386 unix build, and the buoy's firmware freezes exactly its
-# board's import closure, the modules `acomm flash` would copy. Read from
+# on the i386 unix build and on the Pico (rp2040-full), the buoy's firmware
+# (Cortex-M3 and Pico) freezes exactly its board's import closure, the
+# modules `acomm flash` would copy, and the stock Pico image freezes none. Read from
 # the frozen_content.c that MicroPython's mpy-tool wrote for each product,
 # so a module that mpy-tool cannot freeze (as the float literal of
 # acomm/imc/wire.py once was) fails the build, and one left out fails here.
@@ -43,7 +44,7 @@ def _every_module():
     )
 
 
-@pytest.mark.parametrize("product", ["cm3-full", "micropython-i386"])
+@pytest.mark.parametrize("product", ["cm3-full", "micropython-i386", "rp2040-full"])
 def test_the_full_manifest_freezes_every_module(product):
     frozen = _frozen(product)
     missing = sorted(_every_module() - frozen)
@@ -52,8 +53,22 @@ def test_the_full_manifest_freezes_every_module(product):
     assert "acomm_lockstep.py" in frozen
 
 
-def test_the_buoy_firmware_freezes_its_import_closure_and_nothing_else_of_acomm():
-    frozen = _frozen("cm3-buoy")
+# the Pico's own modules, which a user's code may import: the rp2 images
+# keep them under acomm (the buoy's manifest includes the board's own)
+RP2_OWN = {"_boot.py", "rp2.py", "asyncio/__init__.py", "onewire.py", "neopixel.py"}
+
+
+def test_the_stock_pico_firmware_freezes_only_the_boards_own_modules():
+    frozen = _frozen("rp2040-stock")
+    assert RP2_OWN <= frozen
+    assert not any(n.split("/")[0] in ("acomm", "acomm_mp") for n in frozen)
+
+
+@pytest.mark.parametrize("product", ["cm3-buoy", "buoy_pico"])
+def test_the_buoy_firmware_freezes_its_import_closure_and_nothing_else_of_acomm(product):
+    frozen = _frozen(product)
+    if product == "buoy_pico":
+        assert RP2_OWN <= frozen
     for p in (os.path.join(ROOT, "ports", "cpython"), os.path.join(ROOT, "ports", "micropython")):
         if p not in sys.path:
             sys.path.insert(0, p)
