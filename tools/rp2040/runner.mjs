@@ -10,7 +10,8 @@
 // "uart1":..,"ctl":..} once all are bound, then runs until SIGTERM/SIGINT (saving
 // the flash image first when --flash is given). The ctl port takes one command a
 // line and answers one line: reset -> ok (power cycle: new chip, RAM cleared,
-// flash kept), save -> ok, time -> simulated ms, stats -> JSON counters.
+// flash kept; answered once done), save -> ok, time -> simulated ms, stats -> JSON
+// counters, cpu -> JSON PC/LR/WFI state (to see where a stuck firmware waits).
 // --speed-cap: simulated time never runs ahead of wall time times this (0: no cap).
 import fs from 'node:fs';
 import net from 'node:net';
@@ -40,7 +41,7 @@ function die(msg) {
   process.exit(2);
 }
 
-const stats = { resets: 0, ctl_resets: 0, machine_resets: 0, watchdog_resets: 0, flash_erases: 0,
+const stats = { resets: 0, last_reset_ms: null, ctl_resets: 0, machine_resets: 0, watchdog_resets: 0, flash_erases: 0,
   flash_programs: 0, usb_in_bytes: 0, usb_in_dropped: 0, usb_out_bytes: 0, usb_out_dropped: 0,
   emulator_warnings: 0, emulator_errors: 0 };
 for (const u of ['uart0', 'uart1']) {
@@ -57,9 +58,8 @@ class ByteQueue {
     if (!buf.length) return;
     this.chunks.push(Buffer.from(buf));
     this.length += buf.length;
-    if (this.length > this.limit) this.onDrop(this.length - this.limit), this.skip(this.length - this.limit);
+    if (this.length > this.limit) this.onDrop(this.length - this.limit), this.take(this.length - this.limit);
   }
-  skip(n) { this.take(n); }
   take(n) {
     n = Math.min(n, this.length);
     const out = Buffer.alloc(n);
@@ -97,12 +97,13 @@ class Channel {
     else if (this.client.writableLength < BUF_LIMIT) this.client.write(Buffer.from(bytes));
     else this.pending.onDrop(bytes.length); // a client that does not read: don't hoard
   }
-  listen(port) {
-    return new Promise((ok, fail) => {
-      this.server.once('error', fail);
-      this.server.listen(Number(port), opts.host, () => ok(this.server.address().port));
-    });
-  }
+}
+
+function listen(server, port) {
+  return new Promise((ok, fail) => {
+    server.once('error', fail);
+    server.listen(Number(port), opts.host, () => ok(server.address().port));
+  });
 }
 
 // ---- images ----
@@ -191,13 +192,6 @@ class ROSC extends BasePeripheral {
   }
   writeUint32(off, v) { this.regs.set(off, v); }
 }
-// VREG_AND_CHIP_RESET: machine.reset_cause() reads CHIP_RESET (HAD_POR bit 8) before the
-// watchdog's REASON; unimplemented it reads as all ones, i.e. always power-on.
-class ChipReset extends BasePeripheral {
-  constructor(rp, powerOn) { super(rp, 'VREG_AND_CHIP_RESET'); this.vreg = 0xb1; this.bod = 0x91; this.chip = powerOn ? 1 << 8 : 0; }
-  readUint32(off) { return off === 0 ? this.vreg | (1 << 12) : off === 4 ? this.bod : off === 8 ? this.chip : 0; }
-  writeUint32(off, v) { if (off === 0) this.vreg = v & 0xff; else if (off === 4) this.bod = v; }
-}
 // WATCHDOG: rp2040js's own does not reset the chip (its onWatchdogTrigger only logs).
 // This one counts down in simulated time and asks for the hard reset below. RP2040-E1:
 // the counter ticks twice per microsecond, so pico-sdk writes LOAD = 2 x timeout_us and
@@ -272,9 +266,30 @@ function powerOn(carry) {
   rp.core.PC = 0x10000000;
   rp.onBreak = (code) => onBreak(rp, code);
   rp.peripherals[0x40060] = new ROSC(rp);
-  rp.peripherals[0x40064] = new ChipReset(rp, !carry);
   rp.peripherals[0x40058] = new Watchdog(rp, carry);
   rp.uart.forEach((u, i) => wireUart(rp, u, i));
+  // GPIO_IN: rp2040js reads only levels driven from outside (none here), so an output
+  // pin reads back 0 and so does a pulled-up input. Read the pad as a board would: the
+  // driven level of an output, else its pull-up or pull-down.
+  Object.defineProperty(rp, 'gpioValues', { get: () => rp.gpio.reduce((bits, p, i) => {
+    const level = p.outputEnable ? p.outputValue : p.pullupEnabled || (!p.pulldownEnabled && p.rawInputValue);
+    return level && p.inputEnable ? bits | (1 << i) : bits;
+  }, 0) });
+  // Core 1 is not emulated, nor SIO's inter-core FIFO (FIFO_ST 0x50, FIFO_WR 0x54,
+  // FIFO_RD 0x58; rp2040js prints on each access). On every soft reset MicroPython's
+  // mp_thread_deinit() calls multicore_reset_core1(), which powers core 1 off and on
+  // through PSM FRCE_OFF and waits for the 0 that core 1's boot ROM then pushes to core
+  // 0's FIFO: push that 0 here. Writes to core 1 go nowhere, so _thread cannot start.
+  const fromCore1 = [];
+  const psm = rp.peripherals[0x40010], psmWrite = psm.writeUint32.bind(psm);
+  psm.writeUint32 = (off, v) => {
+    const wasOff = psm.frceOff & (1 << 16);
+    psmWrite(off, v);
+    if (off === 4 && wasOff && !(psm.frceOff & (1 << 16))) fromCore1.push(0);
+  };
+  const sioRead = rp.sio.readUint32.bind(rp.sio), sioWrite = rp.sio.writeUint32.bind(rp.sio);
+  rp.sio.readUint32 = (off) => (off === 0x50 ? 2 | (fromCore1.length ? 1 : 0) : off === 0x58 ? fromCore1.shift() ?? 0 : sioRead(off));
+  rp.sio.writeUint32 = (off, v) => { if (off !== 0x54) sioWrite(off, v); };
   chip = rp;
   wireUsb(rp);
 }
@@ -342,6 +357,7 @@ function hardReset(kind) {
   stats[`${kind}_resets`]++;
   const old = chip;
   simBaseNs += old.clock.nanos;
+  stats.last_reset_ms = simBaseNs / 1e6;
   flash = old.flash.slice(0, FLASH_SIZE);
   const wd = old.peripherals[0x40058];
   // ctl reset = power cycle: watchdog state gone; watchdog/machine.reset keep it
@@ -398,7 +414,8 @@ function ctlCommand(line, reply) {
   else if (cmd === 'save') { try { saveFlash(); reply(opts.flash ? 'ok' : 'error no --flash image'); } catch (e) { reply(`error ${e.message}`); } }
   else if (cmd === 'time') reply((simNs() / 1e6).toFixed(3));
   else if (cmd === 'stats') reply(JSON.stringify({ ...stats, sim_ms: simNs() / 1e6, wall_ms: performance.now() - startWall }));
-  else if (cmd) reply(`error unknown command ${JSON.stringify(cmd)} (reset, save, time, stats)`);
+  else if (cmd === 'cpu') reply(JSON.stringify({ pc: chip.core.PC, lr: chip.core.LR, waiting: chip.core.waiting, primask: chip.core.PM, ipsr: chip.core.IPSR }));
+  else if (cmd) reply(`error unknown command ${JSON.stringify(cmd)} (reset, save, time, stats, cpu)`);
 }
 
 const channels = {
@@ -430,11 +447,8 @@ const startWall = performance.now();
 powerOn(null);
 const ports = {};
 try {
-  for (const name of ['usb', 'uart0', 'uart1']) ports[name] = await channels[name].listen(opts[`${name}-port`]);
-  ports.ctl = await new Promise((ok, fail) => {
-    ctl.once('error', fail);
-    ctl.listen(Number(opts['ctl-port']), opts.host, () => ok(ctl.address().port));
-  });
+  for (const name of ['usb', 'uart0', 'uart1']) ports[name] = await listen(channels[name].server, opts[`${name}-port`]);
+  ports.ctl = await listen(ctl, opts['ctl-port']);
 } catch (e) {
   die(`cannot listen: ${e.message}`);
 }

@@ -204,17 +204,21 @@ class PicoBoard:
             self._t = SerialTransport(self.usb, baudrate=115200)
         return self._t
 
-    def alive(self):
-        return self.proc.poll() is None
-
-    def stop(self):
-        """Stops the board (saving its flash image when it has one); returns the runner's stderr."""
+    def close_transport(self):
+        """Closes transport()'s serial port (mpremote opens ptys exclusively), e.g. to run the mpremote CLI."""
         if self._t is not None:
             try:
                 self._t.close()
             except Exception:  # noqa: BLE001 - the pty may be gone already
                 pass
             self._t = None
+
+    def alive(self):
+        return self.proc.poll() is None
+
+    def stop(self):
+        """Stops the board (saving its flash image when it has one); returns the runner's stderr."""
+        self.close_transport()
         if self._ctl is not None:
             self._ctl.close()
             self._ctl = None
