@@ -1,8 +1,8 @@
-# The device half of tools/qemu_runtests.py: uploaded to the Cortex-M3
-# board's filesystem (as /t/qemu_device.mpy) and called over the raw REPL,
-# once per test module:
+# The device half of tools/board_runtests.py: uploaded to the firmware
+# board's filesystem (the Cortex-M3 under qemu, the RP2040 in its emulator;
+# as /t/board_device.mpy) and called over the raw REPL, once per test module:
 #
-#   import qemu_device; qemu_device.run("test_crc", 0[, "substring"])
+#   import board_device; board_device.run("test_crc", 0[, "substring"[, ["test_a", ...]]])
 #
 # imports the module and calls its test_* functions in sorted order from
 # the given index, printing one marker line before and after each so that
@@ -22,7 +22,7 @@ import sys
 import time
 
 
-def run(modname, start, pattern=None):
+def run(modname, start, pattern=None, only=None):
     gc.collect()
     try:
         mod = __import__(modname)
@@ -35,6 +35,8 @@ def run(modname, start, pattern=None):
     for i in range(start, len(names)):
         name = names[i]
         if pattern and pattern not in modname + "." + name:
+            continue
+        if only and name not in only:  # a target that runs some of the module's tests
             continue
         gc.collect()
         print("@@START", i, name)

@@ -1,25 +1,36 @@
 #!/usr/bin/env python3
-# Runs acomm's core tests (tests/core) on the Cortex-M3 firmware under QEMU:
-# build/firmware/cm3-full.elf (tools/firmware.py), MicroPython's qemu port
-# for MPS2-AN385 with acomm and acomm_mp frozen in. What the tests need and
-# the firmware does not hold goes to the board's littlefs filesystem over
-# its UART (mpremote's raw REPL): the test modules and their helpers, the
-# simulator's emulators (ports/sim/acomm_sim), the few files tests read
-# (docs tables, board configs) and the device half of this runner
-# (tools/qemu_device.py), laid out under /t as in the repository. Python
-# files go as .mpy compiled here by the firmware's mpy-cross: compiling on
-# the emulated board is the slow part of an upload otherwise.
+# Runs acomm's core tests (tests/core) on a firmware board:
+#
+#   --target cortex-m3 (default)  build/firmware/cm3-full.elf, MicroPython's
+#       qemu port for MPS2-AN385 with acomm and acomm_mp frozen in, under
+#       qemu-system-arm; every test module
+#   --target rp2040   build/firmware/rp2040-full.uf2, MicroPython's own
+#       RPI_PICO firmware with the same modules frozen in, in the RP2040
+#       emulator (tools/rp2040/runner.mjs, through acomm_cpython.picoboard);
+#       the tests listed in tools/rp2040_tests.txt (why a list: see there)
+#
+# (both built by tools/firmware.py). What the tests need and the firmware
+# does not hold goes to the board's littlefs filesystem over its REPL
+# (mpremote's raw REPL; the Cortex-M3's UART, the Pico's USB CDC): the test
+# modules and their helpers, the simulator's emulators (ports/sim/acomm_sim),
+# the few files tests read (docs tables, board configs) and the device half
+# of this runner (tools/board_device.py), laid out under /t as in the
+# repository. Python files go as .mpy compiled here by the firmware's
+# mpy-cross for the board's architecture: compiling on the emulated board
+# is the slow part of an upload otherwise.
 #
 # Each test module runs after a soft reset (a clean heap, the files stay);
 # each test has its own time limit, and one that overruns is reported as a
-# failure by name, qemu is restarted (the RAM filesystem with it, so the
+# failure by name, the board is restarted (its filesystem with it, so the
 # files are sent again) and the run goes on with the next test. acomm must
 # come from the frozen firmware: the run stops if it is found on the
-# filesystem. The last line is "micropython-cortex-m3: N passed, N failed";
-# the exit status is 1 when anything failed, 2 when the run could not be
-# made at all (no firmware, qemu does not start).
+# filesystem. The last line is "micropython-cortex-m3: N passed, N failed"
+# (micropython-rp2040: for the Pico); the exit status is 1 when anything
+# failed, 2 when the run could not be made at all (no firmware, the board
+# does not start), 3 when the target's emulator is not installed here (the
+# line says how to install it).
 #
-#   python3 tools/qemu_runtests.py [-k SUBSTRING] [--timeout S] [--source]
+#   python3 tools/board_runtests.py [--target T] [-k SUBSTRING] [--timeout S] [--source]
 import argparse
 import glob
 import os
@@ -34,15 +45,27 @@ sys.path.insert(0, os.path.join(ROOT, "ports", "cpython"))
 
 from acomm_cpython.qemuboard import QemuBoard, QemuError  # noqa: E402
 
-NAME = "micropython-cortex-m3"
 FW = os.path.join(ROOT, "build", "firmware")
-HEAP = 2 * 1024 * 1024  # the most the firmware is built for
+
+
+class Target:
+    """A kind of firmware board: its runtime's name, firmware, .mpy arch and per-test time limit."""
+
+    def __init__(self, name, firmware, arch, timeout, select=None):
+        self.name, self.firmware, self.arch, self.timeout, self.select = name, firmware, arch, timeout, select
+
+
+TARGETS = {
+    # the slowest core test takes about a tenth of the limit on a quiet machine
+    "cortex-m3": Target("micropython-cortex-m3", os.path.join(FW, "cm3-full.elf"), "armv7m", 240),
+    # the emulator runs about a thousand times slower than the unix port
+    "rp2040": Target("micropython-rp2040", os.path.join(FW, "rp2040-full.uf2"), "armv6m", 300,
+                     os.path.join(ROOT, "tools", "rp2040_tests.txt")),
+}
+HEAP = 2 * 1024 * 1024  # the most the qemu firmware is built for
 DEV = "/t"  # the repository's place on the board's filesystem
 # what tests read besides modules, relative to ROOT
 DATA = ("docs/codec.md", "docs/wire-format.md", "boards/*/config.py")
-# seconds per test (a hang is killed after this); the slowest core test
-# takes about a tenth of it on a quiet machine
-TIMEOUT_S = 240
 UPLOAD_TIMEOUT_S = 600
 # the board's end of the upload: creates the folders, reads the zlib stream
 # from the UART and writes each file; prints how many and their CRC-32
@@ -81,14 +104,21 @@ print(count, crc)
 
 
 class RunError(Exception):
-    """The run cannot go on (qemu will not start, the upload fails, acomm is not frozen)."""
+    """The run cannot go on (the board will not start, the upload fails, acomm is not frozen)."""
 
 
-def payload(mpy_cross, work, source=False):
-    """[(device path, bytes)] to upload: modules as .mpy (or .py with source=True), data files as they are."""
-    mods = [(p, DEV + "/tests/core/") for p in sorted(glob.glob(os.path.join(ROOT, "tests", "core", "*.py")))]
+class NoEmulator(Exception):
+    """The target's emulator is not installed here: one line says how to install it."""
+
+
+def payload(mpy_cross, work, source=False, arch="armv7m", tests=None):
+    """[(device path, bytes)] to upload: modules as .mpy (or .py with source=True), data files as they are.
+
+    tests: the test modules to send (None: all); the helpers always go."""
+    mods = [(p, DEV + "/tests/core/") for p in sorted(glob.glob(os.path.join(ROOT, "tests", "core", "*.py")))
+            if tests is None or not os.path.basename(p).startswith("test_") or os.path.basename(p)[:-3] in tests]
     mods += [(p, DEV + "/ports/sim/acomm_sim/") for p in sorted(glob.glob(os.path.join(ROOT, "ports", "sim", "acomm_sim", "*.py")))]
-    mods.append((os.path.join(ROOT, "tools", "qemu_device.py"), DEV + "/"))
+    mods.append((os.path.join(ROOT, "tools", "board_device.py"), DEV + "/"))
     out = []
     for src, d in mods:
         base = os.path.basename(src)[:-3]
@@ -97,7 +127,7 @@ def payload(mpy_cross, work, source=False):
                 out.append((d + base + ".py", f.read()))
             continue
         dst = os.path.join(work, d.strip("/").replace("/", "_") + base + ".mpy")
-        r = subprocess.run([mpy_cross, "-march=armv7m", "-s", base + ".py", "-o", dst, src], capture_output=True,
+        r = subprocess.run([mpy_cross, "-march=" + arch, "-s", base + ".py", "-o", dst, src], capture_output=True,
                            text=True)
         if r.returncode != 0:
             raise RunError("mpy-cross %s: %s" % (os.path.relpath(src, ROOT), (r.stderr or r.stdout).strip()))
@@ -114,11 +144,43 @@ def test_modules():
     return sorted(os.path.basename(p)[:-3] for p in glob.glob(os.path.join(ROOT, "tests", "core", "test_*.py")))
 
 
-class Board:
-    """The firmware in qemu with the payload on its filesystem; restarted after a hang."""
+def select(path):
+    """{test module: None (all its tests) or [test names]} from a list file: a line each, 'module' or
+    'module.test', '#' comments."""
+    out = {}
+    with open(path) as f:
+        for line in f:
+            line = line.split("#")[0].strip()
+            if not line:
+                continue
+            mod, _, test = line.partition(".")
+            if test:
+                if out.get(mod, []) is not None:
+                    out.setdefault(mod, []).append(test)
+            else:
+                out[mod] = None
+    return out
 
-    def __init__(self, elf, files, heap):
-        self.elf, self.files, self.heap = elf, files, heap
+
+def _start_board(target, heap):
+    if target.name == TARGETS["rp2040"].name:
+        from acomm_cpython.picoboard import PicoBoard, PicoError
+
+        try:
+            return PicoBoard(target.firmware)
+        except PicoError as e:
+            raise RunError(str(e))
+    try:
+        return QemuBoard(target.firmware, heap=heap)
+    except QemuError as e:
+        raise RunError(str(e))
+
+
+class Board:
+    """The firmware board (qemu or the RP2040 emulator) with the payload on its filesystem; restarted after a hang."""
+
+    def __init__(self, target, files, heap):
+        self.target, self.files, self.heap = target, files, heap
         self.qemu = None
         self.t = None
         self.starts = 0
@@ -127,10 +189,7 @@ class Board:
 
     def start(self):
         self.stop()
-        try:
-            self.qemu = QemuBoard(self.elf, heap=self.heap)
-        except QemuError as e:
-            raise RunError(str(e))
+        self.qemu = _start_board(self.target, self.heap)
         self.starts += 1
         t0 = time.monotonic()
         try:
@@ -139,7 +198,7 @@ class Board:
             self._upload()
             where = self.t.exec("import acomm, acomm_mp\nprint(acomm.__file__, acomm_mp.__file__)").decode().split()
         except Exception as e:  # noqa: BLE001 - mpremote raises several kinds
-            raise RunError("upload to the board failed: %r\nqemu stderr: %s" % (e, self.stop().strip()))
+            raise RunError("upload to the board failed: %r\nemulator stderr: %s" % (e, self.stop().strip()))
         self.upload_s += time.monotonic() - t0
         # frozen modules have a __file__ relative to the frozen root; ones
         # on the filesystem an absolute path
@@ -154,6 +213,8 @@ class Board:
         # mpremote's fs_writefile sends each 256-byte chunk as Python source
         # to compile on the board: 20 KB took 16 s here (the UART of qemu's
         # MPS2 board moves about 4 KB/s); this sends half the bytes, once.
+        # On the Pico the bytes go over USB CDC, paced by the emulator's
+        # runner.
         dirs = set()
         archive = []
         for path, data in self.files:
@@ -181,13 +242,13 @@ class Board:
     def alive(self):
         return self.qemu is not None and self.qemu.alive()
 
-    def run_module(self, mod, start, timeout, k, report):
+    def run_module(self, mod, start, timeout, k, report, only=None):
         """Runs mod's tests from index start; report(kind, i, name, text). Returns (count, next index, how it ended)."""
         t = self.t
         t.enter_raw_repl(soft_reset=True, timeout_overall=60)  # a clean heap; the files stay
         t.exec_raw_no_follow("import sys\nsys.path.append(%r)\nsys.path.append(%r)\nsys.path.append(%r)\n"
-                             "import qemu_device\nqemu_device.run(%r, %d, %r)"
-                             % (DEV, DEV + "/tests/core", DEV + "/ports/sim", mod, start, k))
+                             "import board_device\nboard_device.run(%r, %d, %r, %r)"
+                             % (DEV, DEV + "/tests/core", DEV + "/ports/sim", mod, start, k, only))
         count = None
         cur = None  # (i, name) of the test running
         last = None  # the last marker line, for the text that follows it
@@ -271,20 +332,36 @@ class Board:
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(description="acomm's core tests on the Cortex-M3 firmware under QEMU")
+    p = argparse.ArgumentParser(description="acomm's core tests on a firmware board (Cortex-M3 under QEMU, RP2040 "
+                                            "in its emulator)")
+    p.add_argument("--target", choices=sorted(TARGETS), default="cortex-m3")
     p.add_argument("-k", help="only test modules/functions whose 'module.function' contains this")
-    p.add_argument("--timeout", type=float, default=TIMEOUT_S, help="seconds per test (default %(default)s)")
-    p.add_argument("--heap", type=int, default=HEAP, help="GC heap in bytes (default %(default)s)")
-    p.add_argument("--elf", default=os.path.join(FW, "cm3-full.elf"))
+    p.add_argument("--timeout", type=float, help="seconds per test (default: the target's)")
+    p.add_argument("--heap", type=int, default=HEAP, help="GC heap in bytes, qemu only (default %(default)s)")
+    p.add_argument("--firmware", help="the firmware image (default: the target's in build/firmware/)")
+    p.add_argument("--all", action="store_true", help="every core test, not only the target's list")
     p.add_argument("--source", action="store_true", help="upload .py sources instead of .mpy (compiled on the board)")
     p.add_argument("-v", "--verbose", action="store_true", help="a line per test")
     a = p.parse_args(argv)
+    target = TARGETS[a.target]
+    if a.firmware:
+        target.firmware = os.path.abspath(a.firmware)
+    NAME = target.name
+    timeout = a.timeout or target.timeout
     t_all = time.monotonic()
+    if a.target == "rp2040":
+        from acomm_cpython.picoboard import runner_available
+
+        why = runner_available()
+        if why:
+            print("%s: skipped: %s" % (NAME, why))
+            return 3
     mpy_cross = os.path.join(FW, "mpy-cross")
-    for need in (a.elf, mpy_cross):
+    for need in (target.firmware, mpy_cross):
         if not os.path.isfile(need):
             print("%s: cannot run: %s is not built (make firmware)" % (NAME, os.path.relpath(need, ROOT)))
             return 2
+    chosen = None if a.all or not target.select else select(target.select)
     passed = failed = skipped = 0
     failures = []
 
@@ -306,13 +383,13 @@ def main(argv=None):
             print(text)
         sys.stdout.flush()
 
-    with tempfile.TemporaryDirectory(prefix="acomm-qemu-") as work:
+    with tempfile.TemporaryDirectory(prefix="acomm-board-") as work:
         try:
-            files = payload(mpy_cross, work, a.source)
+            files = payload(mpy_cross, work, a.source, target.arch, chosen)
         except RunError as e:
             print("%s: cannot run: %s" % (NAME, e))
             return 2
-        board = Board(a.elf, files, a.heap)
+        board = Board(target, files, a.heap)
         try:
             board.start()
         except RunError as e:
@@ -320,10 +397,13 @@ def main(argv=None):
             return 2
         print("%s: %d files (%d bytes, %d compressed) uploaded in %.1f s; acomm frozen in %s"
               % (NAME, len(files), sum(len(d) for _, d in files), board.upload_bytes, board.upload_s,
-                 os.path.relpath(a.elf, ROOT)),
+                 os.path.relpath(target.firmware, ROOT)),
               flush=True)
         try:
             for mod in test_modules():
+                if chosen is not None and mod not in chosen:
+                    continue
+                only = chosen and chosen[mod]
                 if a.k and a.k not in mod and not any(a.k in n for n in _test_names(mod)):
                     continue
                 start = 0
@@ -332,13 +412,13 @@ def main(argv=None):
                 while True:
                     if not board.alive():
                         board.start()
-                    count, cur, how = board.run_module(mod, start, a.timeout, a.k, report)
+                    count, cur, how = board.run_module(mod, start, timeout, a.k, report, only)
                     if how == "done":
                         break
                     if how == "timeout":
-                        msg = "no result after %.0f s: killed, qemu restarted" % a.timeout
+                        msg = "no result after %.0f s: killed, the board restarted" % timeout
                     elif how == "died":
-                        msg = "qemu exited: %s" % board.stop().strip()
+                        msg = "the emulator exited: %s" % board.stop().strip()
                     else:
                         msg = how  # something escaped the device runner
                     if how in ("timeout", "died"):
@@ -358,8 +438,8 @@ def main(argv=None):
             board.stop()
     for f in failures:
         print("FAILED", f)
-    print("%s: %.0f s wall, %d qemu start(s), %.1f s uploading" % (NAME, time.monotonic() - t_all, board.starts,
-                                                                   board.upload_s))
+    print("%s: %.0f s wall, %d board start(s), %.1f s uploading" % (NAME, time.monotonic() - t_all, board.starts,
+                                                                     board.upload_s))
     print("%s: %d passed, %d failed%s" % (NAME, passed, failed, ", %d skipped" % skipped if skipped else ""),
           flush=True)
     return 1 if failed else 0
