@@ -36,44 +36,28 @@ if (!opts.firmware || !opts.bootrom) die('usage: runner.mjs --firmware FILE --bo
 const speedCap = Number(opts['speed-cap']);
 const bauds = [Number(opts['uart0-baud']), Number(opts['uart1-baud'])];
 
-function die(msg) {
-  process.stderr.write(`rp2040 runner: ${msg}\n`);
-  process.exit(2);
-}
+function die(msg) { process.stderr.write(`rp2040 runner: ${msg}\n`); process.exit(2); }
 
-const stats = { resets: 0, last_reset_ms: null, ctl_resets: 0, machine_resets: 0, watchdog_resets: 0, flash_erases: 0,
-  flash_programs: 0, usb_in_bytes: 0, usb_in_dropped: 0, usb_out_bytes: 0, usb_out_dropped: 0,
+// uartN_rx_dropped: the 64 KiB input buffer overflowed; _rx_overrun: the 32-byte FIFO was
+// full when a byte arrived; _rx_disabled: the UART was off (the byte is lost, as on a board)
+const stats = { resets: 0, last_reset_ms: null, ctl_resets: 0, machine_resets: 0, watchdog_resets: 0,
+  flash_erases: 0, flash_programs: 0, usb_in_bytes: 0, usb_in_dropped: 0, usb_out_bytes: 0, usb_out_dropped: 0,
   emulator_warnings: 0, emulator_errors: 0 };
 for (const u of ['uart0', 'uart1']) {
-  // rx_dropped: the 64 KiB input buffer overflowed; rx_overrun: the 32-byte FIFO was
-  // full when a byte arrived; rx_disabled: the UART was off (bytes lost, as on a board)
-  Object.assign(stats, { [`${u}_rx_bytes`]: 0, [`${u}_rx_dropped`]: 0, [`${u}_rx_overrun`]: 0,
-    [`${u}_rx_disabled`]: 0, [`${u}_tx_bytes`]: 0, [`${u}_tx_dropped`]: 0, [`${u}_fw_baud`]: 0 });
+  for (const k of ['rx_bytes', 'rx_dropped', 'rx_overrun', 'rx_disabled', 'tx_bytes', 'tx_dropped', 'fw_baud']) stats[`${u}_${k}`] = 0;
 }
 
-// ---- byte queues with a bound: the oldest bytes go first ----
+// ---- byte queues with a bound: past it the oldest bytes go, counted by onDrop ----
 class ByteQueue {
-  constructor(limit, onDrop) { this.chunks = []; this.head = 0; this.length = 0; this.limit = limit; this.onDrop = onDrop; }
-  push(buf) {
-    if (!buf.length) return;
-    this.chunks.push(Buffer.from(buf));
-    this.length += buf.length;
-    if (this.length > this.limit) this.onDrop(this.length - this.limit), this.take(this.length - this.limit);
+  constructor(limit, onDrop) { this.buf = Buffer.alloc(0); this.limit = limit; this.onDrop = onDrop; }
+  get length() { return this.buf.length; }
+  push(data) {
+    this.buf = Buffer.concat([this.buf, data]);
+    const over = this.buf.length - this.limit;
+    if (over > 0) { this.onDrop(over); this.buf = this.buf.subarray(over); }
   }
-  take(n) {
-    n = Math.min(n, this.length);
-    const out = Buffer.alloc(n);
-    let got = 0;
-    while (got < n) {
-      const c = this.chunks[0], k = Math.min(n - got, c.length - this.head);
-      c.copy(out, got, this.head, this.head + k);
-      got += k; this.head += k;
-      if (this.head === c.length) this.chunks.shift(), this.head = 0;
-    }
-    this.length -= n;
-    return out;
-  }
-  clear() { this.chunks = []; this.head = 0; this.length = 0; }
+  take(n) { const out = this.buf.subarray(0, n); this.buf = this.buf.subarray(out.length); return out; }
+  clear() { this.buf = Buffer.alloc(0); }
 }
 
 // ---- one TCP port per channel, one client at a time (a new one replaces the old) ----
@@ -94,7 +78,7 @@ class Channel {
   }
   send(bytes) {
     if (!this.client || !this.client.writable) this.pending.push(bytes); // kept (bounded) until a client connects
-    else if (this.client.writableLength < BUF_LIMIT) this.client.write(Buffer.from(bytes));
+    else if (this.client.writableLength < BUF_LIMIT) this.client.write(bytes);
     else this.pending.onDrop(bytes.length); // a client that does not read: don't hoard
   }
 }
@@ -111,8 +95,7 @@ const bootromBytes = new Uint8Array(fs.readFileSync(opts.bootrom)); // own, alig
 const bootrom = new Uint32Array(bootromBytes.buffer, bootromBytes.byteOffset, bootromBytes.length >> 2);
 const romView = new DataView(bootromBytes.buffer, bootromBytes.byteOffset, bootromBytes.length);
 
-function firmwareImage(path) {
-  // returns [offset, bytes] pieces to write into flash
+function firmwareImage(path) { // [flash offset, bytes] pieces, from a UF2 or a .bin
   const data = fs.readFileSync(path);
   if (data.length < 512 || data.readUInt32LE(0) !== 0x0a324655 || data.readUInt32LE(4) !== 0x9e5d5157) return [[0, data]];
   const pieces = [];
@@ -192,11 +175,12 @@ class ROSC extends BasePeripheral {
   }
   writeUint32(off, v) { this.regs.set(off, v); }
 }
-// WATCHDOG: rp2040js's own does not reset the chip (its onWatchdogTrigger only logs).
-// This one counts down in simulated time and asks for the hard reset below. RP2040-E1:
-// the counter ticks twice per microsecond, so pico-sdk writes LOAD = 2 x timeout_us and
-// a LOAD of n expires after n/2 us. TRIGGER (watchdog_reboot, i.e. machine.reset())
-// resets at once. REASON and SCRATCH0-7 survive a watchdog reset, as on the chip.
+// WATCHDOG: rp2040js's own only calls an onWatchdogTrigger hook (by default it logs), and
+// a reset here means a new chip, which must carry REASON and SCRATCH0-7 over (they
+// survive a watchdog reset on the chip). This one counts down in simulated time and asks
+// for the hard reset below. RP2040-E1: the counter ticks twice per microsecond, so
+// pico-sdk writes LOAD = 2 x timeout_us, and a LOAD of n expires after n/2 us.
+// TRIGGER (watchdog_reboot, i.e. machine.reset()) resets at once.
 class Watchdog extends BasePeripheral {
   constructor(rp, carry) {
     super(rp, 'WATCHDOG');
@@ -238,11 +222,11 @@ class Watchdog extends BasePeripheral {
 
 // ---- the chip; a hard reset builds a new one around the same flash ----
 let chip = null, cdc = null, usbRead = null, pendingReset = null, simBaseNs = 0;
-let anchorSim = 0, anchorWall = 0;
+let anchorSim = 0, anchorWall = 0, sleeper = null;
 const afterReset = [];
 const usbIn = new ByteQueue(BUF_LIMIT, (n) => { stats.usb_in_dropped += n; });
 const uartIn = [0, 1].map((i) => new ByteQueue(BUF_LIMIT, (n) => { stats[`uart${i}_rx_dropped`] += n; }));
-const uartAlarms = [null, null];
+const uartAlarms = [null, null], uartOut = [[], []];
 const logger = {
   // rp2040js logs every access to a register it does not model; count them, and show
   // them only with RP2040_RUNNER_DEBUG=1. Its errors would throw out of the CPU loop.
@@ -251,9 +235,7 @@ const logger = {
   error(c, m) { if (stats.emulator_errors++ < 20) process.stderr.write(`rp2040 runner: [${c}] ${m}\n`); },
 };
 
-function requestReset(kind) {
-  pendingReset = pendingReset || kind;
-}
+const requestReset = (kind) => { pendingReset = pendingReset || kind; };
 
 function powerOn(carry) {
   const rp = new RP2040();
@@ -304,7 +286,7 @@ function wireUart(rp, u, i) {
     write(off, v);
     if (off === 0) { u.interruptStatus |= 1 << 5; u.checkInterrupts(); }
   };
-  u.onByte = (b) => { stats[`uart${i}_tx_bytes`]++; channels[`uart${i}`].send([b]); };
+  u.onByte = (b) => { stats[`uart${i}_tx_bytes`]++; uartOut[i].push(b); }; // sent after the slice
   u.onBaudRateChange = (baud) => { stats[`uart${i}_fw_baud`] = baud; };
   // Behaviour 4: the RX FIFO holds 32 bytes; feed one byte per character time
   // (10 bits at the line's baud) of simulated time, which runs at ~0.3x wall time.
@@ -323,16 +305,15 @@ function feedUart(u, i) {
 }
 
 function uartInput(i, data) {
-  const idle = uartIn[i].length === 0;
+  if (!uartIn[i].length) uartAlarms[i].schedule(1e10 / bauds[i]); // the line was idle: start it
   uartIn[i].push(data);
-  if (idle && chip) uartAlarms[i].schedule(1e10 / bauds[i]);
 }
 
 function wireUsb(rp) {
   // USBCDC enumerates the device (and sets DTR, so MicroPython sends its output).
   cdc = new USBCDC(rp.usbCtrl);
   usbRead = null;
-  cdc.onSerialData = (buf) => { stats.usb_out_bytes += buf.length; channels.usb.send(buf); };
+  cdc.onSerialData = (buf) => { stats.usb_out_bytes += buf.length; channels.usb.send(Buffer.from(buf)); };
   // Behaviour 3: USBCDC answers every OUT buffer at once from a 512-byte FIFO (more is
   // dropped), with empty packets when it has nothing. Here the buffer MicroPython arms
   // is held until there is input, then filled with at most one 64-byte packet; the
@@ -355,11 +336,10 @@ function pumpUsb() {
 function hardReset(kind) {
   stats.resets++;
   stats[`${kind}_resets`]++;
-  const old = chip;
-  simBaseNs += old.clock.nanos;
+  simBaseNs += chip.clock.nanos;
   stats.last_reset_ms = simBaseNs / 1e6;
-  flash = old.flash.slice(0, FLASH_SIZE);
-  const wd = old.peripherals[0x40058];
+  flash = chip.flash.slice(0, FLASH_SIZE);
+  const wd = chip.peripherals[0x40058];
   // ctl reset = power cycle: watchdog state gone; watchdog/machine.reset keep it
   const carry = kind === 'ctl' ? null : { scratch: wd.scratch, reason: kind === 'watchdog' ? 1 : 2 };
   usbIn.clear(); // what the host sent the old chip is lost with its USB session
@@ -372,6 +352,7 @@ function simNs() { return simBaseNs + (chip ? chip.clock.nanos : 0); }
 
 // ---- the CPU loop: slices of ~15 ms wall, yielding to Node's event loop between ----
 function run() {
+  sleeper = null;
   const rp = chip, core = rp.core, clock = rp.clock;
   const nsPerCycle = 1e9 / rp.clkSys;
   const now = performance.now();
@@ -402,9 +383,14 @@ function run() {
     if (clock.nanos > cap) { idle = true; break; }
     if (performance.now() > sliceEnd) break;
   }
+  uartOut.forEach((out, i) => { if (out.length) channels[`uart${i}`].send(Buffer.from(out.splice(0))); });
   if (pendingReset) { const k = pendingReset; pendingReset = null; hardReset(k); }
-  if (idle) setTimeout(run, 1);
+  if (idle) sleeper = setTimeout(run, 1);
   else setImmediate(run);
+}
+
+function wake() { // input arrived: don't leave it waiting for the idle timer
+  if (sleeper) { clearTimeout(sleeper); sleeper = null; setImmediate(run); }
 }
 
 // ---- control port ----
@@ -419,9 +405,9 @@ function ctlCommand(line, reply) {
 }
 
 const channels = {
-  usb: new Channel('usb', (d) => { usbIn.push(d); pumpUsb(); }),
-  uart0: new Channel('uart0', (d) => uartInput(0, d)),
-  uart1: new Channel('uart1', (d) => uartInput(1, d)),
+  usb: new Channel('usb', (d) => { usbIn.push(d); pumpUsb(); wake(); }),
+  uart0: new Channel('uart0', (d) => { uartInput(0, d); wake(); }),
+  uart1: new Channel('uart1', (d) => { uartInput(1, d); wake(); }),
 };
 const ctl = net.createServer((sock) => {
   let buf = '';

@@ -28,8 +28,6 @@ import tempfile
 import threading
 import time
 
-from acomm_cpython.qemuboard import _die_with_parent, repo_root
-
 BOOTROM_NAME = "rp2040-bootrom-b1.bin"
 START_TIMEOUT_S = 20
 PTY_TIMEOUT_S = 5
@@ -38,6 +36,23 @@ CTL_TIMEOUT_S = 30
 
 class PicoError(Exception):
     pass
+
+
+def _die_with_parent():
+    # node and socat are killed when the process that started them dies, even
+    # by SIGKILL (a test runner's timeout): an orphaned board holds a core
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+def repo_root():
+    import acomm
+
+    return os.path.dirname(os.path.dirname(os.path.abspath(acomm.__file__)))
 
 
 def runner_dir():
@@ -75,6 +90,8 @@ def runner_available(ptys=True):
     if not os.path.isdir(os.path.join(runner_dir(), "node_modules", "rp2040js")):
         return "rp2040js is not installed: run `npm ci --prefix tools/rp2040`"
     if bootrom() is None:
+        if os.environ.get("ACOMM_RP2040_BOOTROM"):
+            return "no RP2040 boot ROM at ACOMM_RP2040_BOOTROM=%s" % os.environ["ACOMM_RP2040_BOOTROM"]
         return ("no RP2040 boot ROM: set ACOMM_RP2040_BOOTROM or put %s in ../shared/vendor/ "
                 "beside the repository (or $ACOMM_SHARED/vendor/)" % BOOTROM_NAME)
     if ptys and shutil.which("socat") is None:
