@@ -79,6 +79,17 @@ def test_mpremote_exec_and_fs_cp_through_the_pty(pico, tmp_path):
     assert t.fs_readfile("blob.txt") == src.read_bytes()
 
 
+def test_usb_burst_beyond_512_bytes_is_not_dropped(pico):
+    # a raw-REPL command written at once, without raw-paste flow control:
+    # rp2040js's own CDC helper keeps 512 bytes and drops the rest
+    t = pico.transport()
+    code = "x = b'%s'\nprint(len(x), x == b'0123456789' * 800)" % ("0123456789" * 800)
+    t.serial.write(code.encode() + b"\x04")
+    assert t.read_until(1, b"OK", timeout=10).endswith(b"OK")
+    out, err = t.follow(20)
+    assert (out.strip(), err) == (b"8000 True", b"")
+
+
 @pytest.mark.parametrize("uart, baud, tx, rx", [(0, 115200, 0, 1), (1, 19200, 4, 5)])
 def test_uart_echo_arrives_whole(pico, uart, baud, tx, rx):
     import serial
