@@ -289,7 +289,7 @@ function wireUart(rp, u, i) {
   u.onByte = (b) => { stats[`uart${i}_tx_bytes`]++; uartOut[i].push(b); }; // sent after the slice
   u.onBaudRateChange = (baud) => { stats[`uart${i}_fw_baud`] = baud; };
   // Behaviour 4: the RX FIFO holds 32 bytes; feed one byte per character time
-  // (10 bits at the line's baud) of simulated time, which runs at ~0.3x wall time.
+  // (10 bits at the line's baud) of simulated time, which runs slower than wall time.
   uartAlarms[i] = rp.clock.createAlarm(() => feedUart(u, i));
   if (uartIn[i].length) uartAlarms[i].schedule(1e10 / bauds[i]);
 }

@@ -13,8 +13,10 @@
 # flash: a 2 MiB flash image loaded at start when it exists (the firmware is
 # then written over its first 640 KiB only, so the littlefs at 0x100a0000
 # survives a firmware change) and written back by save() and stop(). The
-# emulator runs at about 0.3x real time when busy and never faster than real
-# time when idle; sim_ms() is the board's clock. Needs node, the runner's
+# emulator runs at about 0.6x real time when busy and never faster than real
+# time when idle (speed_cap: that bound as a multiple of real time, 0 for
+# none); sim_ms() is the board's clock. mpremote opens a pty exclusively:
+# close_transport() before running the mpremote CLI on .usb. Needs node, the runner's
 # node_modules (`npm ci --prefix tools/rp2040`), the RP2040 boot ROM and socat:
 # runner_available() says which is missing.
 import json
