@@ -91,12 +91,15 @@ function listen(server, port) {
 }
 
 // ---- images ----
-const bootromBytes = new Uint8Array(fs.readFileSync(opts.bootrom)); // own, aligned buffer
+function read(path) {
+  try { return fs.readFileSync(path); } catch (e) { return die(`cannot read ${path}: ${e.message}`); }
+}
+const bootromBytes = new Uint8Array(read(opts.bootrom)); // own, aligned buffer
 const bootrom = new Uint32Array(bootromBytes.buffer, bootromBytes.byteOffset, bootromBytes.length >> 2);
 const romView = new DataView(bootromBytes.buffer, bootromBytes.byteOffset, bootromBytes.length);
 
 function firmwareImage(path) { // [flash offset, bytes] pieces, from a UF2 or a .bin
-  const data = fs.readFileSync(path);
+  const data = read(path);
   if (data.length < 512 || data.readUInt32LE(0) !== 0x0a324655 || data.readUInt32LE(4) !== 0x9e5d5157) return [[0, data]];
   const pieces = [];
   for (let off = 0; off + 512 <= data.length; off += 512) {
@@ -110,7 +113,7 @@ function firmwareImage(path) { // [flash offset, bytes] pieces, from a UF2 or a 
 
 let flash = new Uint8Array(FLASH_SIZE).fill(0xff);
 if (opts.flash && fs.existsSync(opts.flash)) {
-  flash.set(fs.readFileSync(opts.flash).subarray(0, FLASH_SIZE));
+  flash.set(read(opts.flash).subarray(0, FLASH_SIZE));
   flash.fill(0xff, 0, FIRMWARE_REGION); // the firmware is replaced, the filesystem kept
 }
 for (const [off, bytes] of firmwareImage(opts.firmware)) {
@@ -369,7 +372,7 @@ function run() {
         // WFI/WFE: jump to the next timer event, but not past wall time (the
         // firmware's timeouts must mean the same to programs on the TCP side)
         const next = clock.nextAlarm ? clock.nanos + clock.nanosToNextAlarm : Infinity;
-        if (next > cap) {
+        if (next > cap || next === Infinity) { // nothing due before the cap, or at all
           if (cap !== Infinity && cap > clock.nanos) clock.tick(cap - clock.nanos);
           idle = true;
           break slice;
