@@ -227,7 +227,8 @@ class Watchdog extends BasePeripheral {
 let chip = null, cdc = null, usbRead = null, pendingReset = null, simBaseNs = 0;
 let anchorSim = 0, anchorWall = 0, sleeper = null;
 const afterReset = [];
-const usbIn = new ByteQueue(BUF_LIMIT, (n) => { stats.usb_in_dropped += n; });
+// room for what one socket read brings (up to 64 KiB) past the point where the socket is paused
+const usbIn = new ByteQueue(4 * BUF_LIMIT, (n) => { stats.usb_in_dropped += n; });
 const uartIn = [0, 1].map((i) => new ByteQueue(BUF_LIMIT, (n) => { stats[`uart${i}_rx_dropped`] += n; }));
 const uartAlarms = [null, null], uartOut = [[], []];
 const logger = {
@@ -334,6 +335,8 @@ function pumpUsb() {
   stats.usb_in_bytes += bytes.length;
   chip.usbCtrl.endpointReadDone(usbRead.ep, bytes);
   usbRead = null;
+  const c = channels.usb.client;
+  if (c && c.isPaused() && usbIn.length < BUF_LIMIT / 4) c.resume();
 }
 
 function hardReset(kind) {
@@ -408,7 +411,12 @@ function ctlCommand(line, reply) {
 }
 
 const channels = {
-  usb: new Channel('usb', (d) => { usbIn.push(d); pumpUsb(); wake(); }),
+  // USB has flow control (the device NAKs what it cannot take): past half the queue the
+  // client's socket is paused, so TCP holds the rest back instead of bytes being dropped
+  usb: new Channel('usb', (d) => {
+    usbIn.push(d); pumpUsb(); wake();
+    if (usbIn.length >= BUF_LIMIT / 2 && channels.usb.client) channels.usb.client.pause();
+  }),
   uart0: new Channel('uart0', (d) => { uartInput(0, d); wake(); }),
   uart1: new Channel('uart1', (d) => { uartInput(1, d); wake(); }),
 };
