@@ -292,8 +292,13 @@ def _fresh(name, k):
 
 
 def _run(cmd, log):
+    # MicroPython's makeversionhdr.py asks git for the version: the tree is
+    # under build/ in this repository, so git would answer with acomm's
+    # commit; above build/mpy-src it finds nothing and takes mpconfig.h's
+    # (v1.28.0)
+    env = dict(os.environ, GIT_CEILING_DIRECTORIES=os.path.join(BUILD, "mpy-src"))
     with open(log, "w") as f:
-        r = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT)
+        r = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, env=env)
     if r.returncode != 0:
         with open(log) as f:
             tail = f.read().splitlines()[-25:]
