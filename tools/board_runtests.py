@@ -51,8 +51,9 @@ FW = os.path.join(ROOT, "build", "firmware")
 class Target:
     """A kind of firmware board: its runtime's name, firmware, .mpy arch and per-test time limit."""
 
-    def __init__(self, name, firmware, arch, timeout, select=None):
+    def __init__(self, name, firmware, arch, timeout, select=None, compress=True):
         self.name, self.firmware, self.arch, self.timeout, self.select = name, firmware, arch, timeout, select
+        self.compress = compress
 
 
 TARGETS = {
@@ -60,7 +61,7 @@ TARGETS = {
     "cortex-m3": Target("micropython-cortex-m3", os.path.join(FW, "cm3-full.elf"), "armv7m", 240),
     # the emulator runs about a thousand times slower than the unix port
     "rp2040": Target("micropython-rp2040", os.path.join(FW, "rp2040-full.uf2"), "armv6m", 300,
-                     os.path.join(ROOT, "tools", "rp2040_tests.txt")),
+                     os.path.join(ROOT, "tools", "rp2040_tests.txt"), compress=False),
 }
 HEAP = 2 * 1024 * 1024  # the most the qemu firmware is built for
 DEV = "/t"  # the repository's place on the board's filesystem
@@ -70,28 +71,33 @@ UPLOAD_TIMEOUT_S = 600
 # the board's end of the upload: creates the folders, reads the zlib stream
 # from the UART and writes each file; prints how many and their CRC-32
 UNPACK = """import sys, os, io, micropython, deflate, binascii
+micropython.kbd_intr(-1)
 for d in %r:
     try:
         os.mkdir(d)
     except OSError:
         pass
-micropython.kbd_intr(-1)
-buf = bytearray(%d)
-mv = memoryview(buf)
-n = 0
-while n < len(buf):
-    n += sys.stdin.buffer.readinto(mv[n:])
-micropython.kbd_intr(3)
-z = deflate.DeflateIO(io.BytesIO(buf), deflate.ZLIB)
+nz = %d
+if nz:
+    buf = bytearray(nz)
+    mv = memoryview(buf)
+    n = 0
+    print("GO")
+    while n < nz:
+        n += sys.stdin.buffer.readinto(mv[n:])
+    z = deflate.DeflateIO(io.BytesIO(buf), deflate.ZLIB)
+else:
+    z = sys.stdin.buffer
+    print("GO")
 count = crc = 0
 while True:
     path = z.readline()
-    if not path:
+    if len(path) < 2:
         break
     left = int(z.readline())
     f = open(path[:-1].decode(), "wb")
     while left:
-        b = z.read(min(left, 4096))
+        b = z.read(min(left, 1024))
         if not b:
             raise OSError("short")
         crc = binascii.crc32(b, crc)
@@ -99,6 +105,7 @@ while True:
         left -= len(b)
     f.close()
     count += 1
+micropython.kbd_intr(3)
 print(count, crc)
 """
 
@@ -222,10 +229,16 @@ class Board:
             for i in range(1, len(parts) + 1):
                 dirs.add("/" + "/".join(parts[:i]))
             archive.append(b"%s\n%d\n" % (path.encode(), len(data)) + data)
-        archive = b"".join(archive)
-        z = zlib.compress(archive, 9)
+        archive = b"".join(archive) + b"\n"  # an empty path ends it
+        # the slow UART gets it compressed, whole into the board's big heap;
+        # the Pico's USB gets it as it is, streamed (its heap would not
+        # hold it)
+        z = zlib.compress(archive, 9) if self.target.compress else archive
         self.upload_bytes = len(z)
-        self.t.exec_raw_no_follow(UNPACK % (sorted(dirs), len(z)))
+        self.t.exec_raw_no_follow(UNPACK % (sorted(dirs), len(z) if self.target.compress else 0))
+        # not before the board has turned Ctrl-C off: a 0x03 in the stream
+        # would interrupt it (a fast link, the Pico's USB, gets there first)
+        self.t.read_until(1, b"GO\r\n", timeout=60)
         self.t.serial.write(z)
         out, err = self.t.follow(UPLOAD_TIMEOUT_S)
         want = "%d %d" % (len(self.files), zlib.crc32(b"".join(d for _, d in self.files)))
@@ -395,7 +408,7 @@ def main(argv=None):
         except RunError as e:
             print("%s: cannot run: %s" % (NAME, e))
             return 2
-        print("%s: %d files (%d bytes, %d compressed) uploaded in %.1f s; acomm frozen in %s"
+        print("%s: %d files (%d bytes, %d sent) uploaded in %.1f s; acomm frozen in %s"
               % (NAME, len(files), sum(len(d) for _, d in files), board.upload_bytes, board.upload_s,
                  os.path.relpath(target.firmware, ROOT)),
               flush=True)
