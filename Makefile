@@ -36,15 +36,17 @@ firmware: $(VENV)/.dev
 
 # The RP2040 emulator (tools/rp2040: rp2040js, pinned by its lock file, and
 # the runner around it), installed with npm ci when the lock file is newer
-# than what is installed. Node.js and npm come from Debian when missing and
-# this runs as root; without them the RP2040 runtime is skipped with a line
-# saying so (tools/board_runtests.py --target rp2040).
+# than what is installed. Node.js, npm and socat (a pty in front of each of
+# the emulated Pico's ports) come from Debian when missing and this runs as
+# root; without them the RP2040 runtime is skipped with a line saying so
+# (tools/board_runtests.py --target rp2040).
 RP2040_JS = tools/rp2040/node_modules/.package-lock.json
 rp2040-emulator:
-	@if ! command -v npm >/dev/null 2>&1 && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	  echo "rp2040: installing nodejs npm"; \
-	  DEBIAN_FRONTEND=noninteractive apt-get install -y -q nodejs npm >/dev/null 2>&1 || \
-	  { apt-get update -q >/dev/null 2>&1; DEBIAN_FRONTEND=noninteractive apt-get install -y -q nodejs npm >/dev/null 2>&1; }; \
+	@miss=""; for t in node:nodejs npm:npm socat:socat; do command -v $${t%%:*} >/dev/null 2>&1 || miss="$$miss $${t#*:}"; done; \
+	if [ -n "$$miss" ] && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	  echo "rp2040: installing$$miss"; \
+	  DEBIAN_FRONTEND=noninteractive apt-get install -y -q $$miss >/dev/null 2>&1 || \
+	  { apt-get update -q >/dev/null 2>&1; DEBIAN_FRONTEND=noninteractive apt-get install -y -q $$miss >/dev/null 2>&1; }; \
 	fi; \
 	if ! command -v npm >/dev/null 2>&1; then echo "rp2040: no npm here (apt-get install nodejs npm)"; \
 	elif [ ! $(RP2040_JS) -nt tools/rp2040/package-lock.json ]; then \
