@@ -111,6 +111,18 @@ def _config_text():
         return f.read()
 
 
+def put_files(t, store=None):
+    # the buoy's config (and store) onto a board at its raw REPL. mpremote's
+    # fs_writefile leaves its file object in __main__ as f (and f.write as
+    # w): closed, but holding its littlefs cache (1 KiB on a Pico, whose
+    # flash is written 256 bytes at a time; 128 bytes on the qemu board)
+    # for the whole minute. It is not the buoy's, so it goes
+    t.fs_writefile("/config.py", _config_text().encode())
+    if store is not None:
+        t.fs_writefile("/store", store)
+    t.exec("del f, w")
+
+
 def _read_until(ser, ends, limit_s):
     # what the board writes until one of `ends` (or the time limit)
     buf = b""
@@ -148,9 +160,7 @@ def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LI
         t = board.transport()
         t.serial.timeout = 15
         t.enter_raw_repl(soft_reset=False)
-        t.fs_writefile("/config.py", _config_text().encode())
-        if store is not None:
-            t.fs_writefile("/store", store)
+        put_files(t, store)
         t.exec_raw_no_follow("import acomm_lockstep\nacomm_lockstep.main('/config.py', '/store', None, %r)" % bool(info))
         pre = _read_until(t.serial, (b"LOCK", b"\x04>"), 60)
         if not pre.endswith(b"LOCK"):
