@@ -264,3 +264,35 @@ def test_missing_device_fails_with_no_answer():
     assert time.monotonic() - t < 40
     assert r.returncode != 0
     assert "no answer from /dev/acomm-no-such-device" in r.stderr
+
+
+@pytest.mark.parametrize("reset", [False, True])
+def test_reset_after_the_copy_only_when_asked(monkeypatch, capsys, reset):
+    # --reset: mpremote's `reset` once every file is on the board, as the
+    # last call; without it the board is left at its REPL (the Cortex-M3
+    # tests go on to use it there)
+    fake = _FakeMpremote(free=10 << 20)
+    monkeypatch.setattr(flash, "_mpremote", fake)
+    rc = cli.main(["flash", "--board", "buoy_pico", "--port", "/dev/ttyFAKE", "--no-compile"]
+                  + (["--reset"] if reset else []))
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert fake.calls[-2][:2] == ["fs", "cp"]
+    assert (fake.calls[-1] == ["reset"]) == reset
+    assert sum(1 for c in fake.calls if c[0] == "reset") == (1 if reset else 0)
+    assert ("reset /dev/ttyFAKE: main.py starts" in out) == reset
+    assert ("reset the board to start it" in out) == (not reset)
+
+
+def test_reset_that_fails_is_reported(monkeypatch, capsys):
+    fake = _FakeMpremote(free=10 << 20)
+
+    def failing(device, args, what, timeout=flash.TIMEOUT_S):
+        if args == ["reset"]:
+            raise flash.FlashError("%s: could not enter raw repl" % what)
+        return fake(device, args, what, timeout)
+
+    monkeypatch.setattr(flash, "_mpremote", failing)
+    rc = cli.main(["flash", "--board", "buoy_pico", "--port", "/dev/ttyFAKE", "--no-compile", "--reset"])
+    err = capsys.readouterr().err
+    assert rc == 1 and "resetting /dev/ttyFAKE: could not enter raw repl" in err, err

@@ -21,6 +21,10 @@
 # 2; --force flashes past a version mismatch). Copies of acomm left in
 # /lib by an earlier flash are removed: they would never run, and would
 # confuse whoever reads the board's files.
+#
+# --reset: a hard reset once the copy is done (mpremote's `reset`), so the
+# board starts its new main.py as a freshly flashed Pico does. Without it the
+# board stays at its REPL, where a test or the user may still look at it.
 
 import os
 import shutil
@@ -232,6 +236,8 @@ def add_arguments(p):
                         "the board has no frozen acomm (without it this is found out on the board)")
     p.add_argument("--force", action="store_true",
                    help="flash even when the board's frozen acomm has another version than this host's")
+    p.add_argument("--reset", action="store_true",
+                   help="hard-reset the board once the files are copied, so its main.py starts")
 
 
 def run(args, log=print):
@@ -278,8 +284,19 @@ def run(args, log=print):
         kind = "main.py and config.py"
     log("flashing board %s (%s) to %s" % (args.board, kind, args.port))
     n, b = flash(args.port, entries, log, dev)
-    log("flashed %d files, %d bytes to %s; reset the board to start it" % (n, b, args.port))
+    if not args.reset:
+        log("flashed %d files, %d bytes to %s; reset the board to start it" % (n, b, args.port))
+        return 0
+    log("flashed %d files, %d bytes to %s" % (n, b, args.port))
+    reset(args.port)
+    log("reset %s: main.py starts the board" % args.port)
     return 0
+
+
+def reset(device):
+    """Hard-resets the board (mpremote's `reset`: machine.reset() sent without
+    waiting for an answer, since the USB link goes down with the board)."""
+    _mpremote(device, ["reset"], "resetting %s" % device)
 
 
 def main(args):
