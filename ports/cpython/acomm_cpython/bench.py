@@ -39,8 +39,11 @@ BENCHES = {
     "web": "web_workload",
     # a sweep in one process and on 2 Dask workers (needs the sweep extra)
     "sweep": "sweep_workload",
+    # the buoy flashed onto an emulated RP2040, relaying a diver's report to
+    # Iridium through a reset: minutes of wall time, so not in `all`
+    "board": "board_workload",
 }
-NOT_IN_ALL = ("compare", "soak", "attack", "sweep")
+NOT_IN_ALL = ("compare", "soak", "attack", "sweep", "board")
 
 
 def find_micropython():
