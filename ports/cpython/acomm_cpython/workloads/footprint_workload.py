@@ -49,11 +49,14 @@ def bisect(trial, lo, hi, say=None):
     one lucky size is not the figure.
     """
     lo, hi = lo // 256 * 256, (hi + 255) // 256 * 256
+    passed = set()
 
     def ok(h):
         r = trial(h)
         if say:
             say("%7d  %s" % (h, "ok (peak %s)" % r.get("peak") if r["fail"] is None else "FAIL: " + r["fail"]))
+        if r["fail"] is None:
+            passed.add(h)
         return r["fail"] is None
 
     while hi - lo > 256:
@@ -62,12 +65,16 @@ def bisect(trial, lo, hi, say=None):
             hi = mid
         else:
             lo = mid
-    k = 1
+    # hi and the next two sizes must have passed, each tried once: after a
+    # failure above hi the count starts again from the size above it, which
+    # is tried too (hi itself is untried only when no midpoint passed)
+    k = 0
     while k < 3:
-        if not ok(hi + 256 * k):
-            hi += 256 * (k + 1)
-            k = 0
-        k += 1
+        h = hi + 256 * k
+        if h in passed or ok(h):
+            k += 1
+        else:
+            hi, k = h + 256, 0
     return hi
 
 
@@ -184,20 +191,7 @@ def _heap_min(flash_dir, rom=None):
     # bisection to 256 bytes (lo fails, too small to start; hi works), then
     # up until three sizes in a row work: near the edge the outcome depends
     # on where fragments fall, so one lucky size is not the figure
-    lo, hi = 4096, 256 * 1024
-    while hi - lo > 256:
-        mid = (lo + hi) // 2 // 256 * 256
-        if run_once(flash_dir, mid, rom=rom) is None:
-            lo = mid
-        else:
-            hi = mid
-    k = 1
-    while k < 3:
-        if run_once(flash_dir, hi + 256 * k, rom=rom) is None:
-            hi += 256 * (k + 1)
-            k = 0
-        k += 1
-    return hi
+    return bisect(lambda h: {"fail": None if run_once(flash_dir, h, rom=rom) else "failed"}, 4096, 256 * 1024)
 
 
 def run(emit, only=None):
