@@ -14,7 +14,10 @@
 #       image: on the qemu board at its ROMFS partition, on i386 read into a
 #       bytearray first thing, whose size is taken off), mpy (the .mpy files
 #       `acomm flash` copies, under /lib on the board's littlefs). where:
-#       cortex_m (qemu Cortex-M3) or i386.
+#       cortex_m (qemu Cortex-M3), i386 or rp2040 (the Pico's firmware in
+#       the rp2040js emulator; its heap is fixed, so a smaller one is made
+#       by a blocker allocated first: footprint_pico's header says how, and
+#       how the figure still counts the GC region with its tables).
 #   heap_after_imports_* / heap_after_build_*   gc.mem_alloc() once every
 #       module the buoy runs is imported / once its node is built (roomy heap)
 #   heap_peak_*   gc.mem_alloc() at its highest over the minute, garbage
@@ -23,9 +26,24 @@
 #       of the firmware without acomm and with the buoy's import closure frozen
 #   *_unix64_estimate_bytes   the first figures, on the 64-bit pip unix port
 #       with -X heapsize=Nw: estimates that understate a 32-bit board
+#   RP2040 (footprint_pico): flash_image_{rp2040_stock,buoy_pico}_bytes the
+#       images' sizes in flash (from their UF2); heap_free_boot_rp2040_stock
+#       gc.mem_free() after a collect at the stock firmware's REPL, just
+#       booted; heap_pool_rp2040 its whole GC pool; heap_*_mpy_rp2040* the
+#       buoy as `acomm flash` installs it on the stock firmware, on the
+#       whole heap, without the harness's .mpy (heap_harness_mpy_rp2040:
+#       what it took); heap_free_mpy_rp2040[_loaded] gc.mem_free() after a
+#       collect once the node is built (holding the seeded store)
+#
+# The RP2040 groups are in the default run (the issue's figures come from
+# `acomm bench footprint`) but take most of its time: a Pico minute is 1-2
+# minutes of wall time, so frozen_rp2040 and loaded_rp2040 take 15-25
+# minutes each. Without node, rp2040js or the boot ROM they are skipped
+# with a note (named with --only, they fail with it).
 #
 #   python -m acomm_cpython.workloads.footprint_workload --only frozen_cortex_m [-v]
 #   python -m acomm_cpython.workloads.footprint_workload --only frozen_cortex_m --heap 53248 --info
+#   python -m acomm_cpython.workloads.footprint_workload --only frozen_rp2040 --heap 53248   (--heap 0: the whole heap)
 import json
 import os
 import shutil
@@ -33,6 +51,7 @@ import subprocess
 import tempfile
 import time
 
+from acomm_cpython.workloads import footprint_pico as pico
 from acomm_cpython.workloads.footprint_minute import LOAD_PACKETS, seed_store
 from acomm_cpython.workloads.footprint_runners import (Staged, build_romfs, micropython_i386, micropython_unix64, run_i386,
                                                        run_once, run_qemu, stage_flash)
@@ -40,13 +59,15 @@ from acomm_cpython.workloads.footprint_runners import (Staged, build_romfs, micr
 PER_RUNTIME = ()
 
 
-def bisect(trial, lo, hi, say=None):
+def bisect(trial, lo, hi, say=None, first=None):
     """The smallest heap, in 256-byte steps, at which trial(heap) passes and so do the next two sizes up.
 
     trial(heap) -> a run_* dict ("fail" None on a pass). lo: a size that
     cannot work (below what is live once the node is built), hi: one that
     worked. Near the edge the outcome depends on where fragments fall, so
-    one lucky size is not the figure.
+    one lucky size is not the figure. first: a guess near the answer, tried
+    before the midpoints (it narrows the bracket whichever way it goes: a
+    Pico minute is too slow to spend on halving a wide one).
     """
     lo, hi = lo // 256 * 256, (hi + 255) // 256 * 256
     passed = set()
@@ -59,6 +80,11 @@ def bisect(trial, lo, hi, say=None):
             passed.add(h)
         return r["fail"] is None
 
+    if first is not None and lo < first // 256 * 256 < hi:
+        if ok(first // 256 * 256):
+            hi = first // 256 * 256
+        else:
+            lo = first // 256 * 256
     while hi - lo > 256:
         mid = (lo + hi) // 2 // 256 * 256
         if ok(mid):
@@ -122,7 +148,7 @@ VERBOSE = False
 
 # --only NAME: each group of figures and what it needs
 GROUPS = ("frozen_cortex_m", "loaded_cortex_m", "romfs_cortex_m", "mpy_cortex_m", "frozen_i386", "romfs_i386", "mpy_i386",
-          "flash_text", "unix64")
+          "flash_text", "boot_rp2040", "frozen_rp2040", "loaded_rp2040", "mpy_rp2040", "unix64")
 
 
 def _group(name, emit, ctx):
@@ -166,10 +192,43 @@ def _group(name, emit, ctx):
         st = ctx.setdefault("armv7m", Staged(ctx["tmp"], "armv7m"))
         emit("mpy_total_armv7m_bytes", sum(os.path.getsize(os.path.join(d, f)) for d, _, fs in os.walk(st.lib)
                                            for f in fs), "bytes")
+    elif name.endswith("_rp2040"):
+        _rp2040(name, emit, ctx)
     elif name == "unix64":
         _unix64(emit, ctx["tmp"])
     else:
         raise ValueError("unknown footprint figure %r: one of %s" % (name, ", ".join(GROUPS)))
+
+
+def _store_bytes(ctx):
+    # the seeded store file (seed_store), made once per bench run
+    if "store" not in ctx:
+        with open(seed_store(os.path.join(ctx["tmp"], "store")), "rb") as f:
+            ctx["store"] = f.read()
+    return ctx["store"]
+
+
+def _rp2040(name, emit, ctx):
+    why = pico.missing()
+    if why:
+        raise RuntimeError("%s needs the RP2040 emulator: %s" % (name, why))
+    t0 = time.monotonic()
+    say = (lambda m: _say("%s %s" % (name, m))) if VERBOSE else None
+    if name == "boot_rp2040":
+        pico.boot_figures(emit)
+    elif name == "frozen_rp2040":
+        ctx["empty_rp2040"] = pico.frozen_figures(emit, bisect, say)
+    elif name == "loaded_rp2040":
+        r = pico.frozen_figures(emit, bisect, say, store=_store_bytes(ctx))
+        empty = ctx.get("empty_rp2040") or pico.run_pico(pico.need("rp2040-full"), pico.ROOMY, peak=False)
+        if empty["fail"]:
+            raise RuntimeError("the buoy's minute failed on the Pico at %d bytes: %s" % (pico.ROOMY, empty["fail"]))
+        emit("heap_per_stored_packet_rp2040_bytes", (r["after_build"] - empty["after_build"]) // LOAD_PACKETS, "bytes")
+    elif name == "mpy_rp2040":
+        pico.mpy_figures(emit, ctx["tmp"], _store_bytes(ctx), say)
+    else:
+        raise ValueError("unknown footprint figure %r: one of %s" % (name, ", ".join(GROUPS)))
+    _say("%s: %.0f s" % (name, time.monotonic() - t0))
 
 
 def _unix64(emit, tmp):
@@ -196,6 +255,11 @@ def _heap_min(flash_dir, rom=None):
 
 def run(emit, only=None):
     names = [only] if only else [g for g in GROUPS if g != "unix64"] + ["unix64"]
+    if not only and pico.missing():
+        # the Pico's figures need tools beyond the firmware (node, rp2040js,
+        # the boot ROM): the rest of the default run goes on without them
+        _say("RP2040 groups skipped: %s" % pico.missing())
+        names = [n for n in names if not n.endswith("_rp2040")]
     tmp = tempfile.mkdtemp(prefix="acomm-footprint-")
     ctx = {"tmp": tmp}
     t0 = time.monotonic()
@@ -220,7 +284,7 @@ def main(argv=None):
     p.add_argument("-v", "--verbose", action="store_true", help="each bisection step on stderr")
     a = p.parse_args(argv)
     VERBOSE = a.verbose
-    if a.heap:
+    if a.heap is not None:
         return _one(a.only or "frozen_cortex_m", a.heap, a.info)
 
     def emit(name, value, unit):
@@ -233,7 +297,9 @@ def main(argv=None):
 def _one(name, heap, info):
     tmp = tempfile.mkdtemp(prefix="acomm-footprint-")
     try:
-        if name == "frozen_cortex_m":
+        if name.endswith("_rp2040"):
+            r = _one_pico(name, heap, info, tmp)
+        elif name == "frozen_cortex_m":
             r = run_qemu(_fw("cm3-full"), heap, info=info)
         elif name == "loaded_cortex_m":
             with open(seed_store(os.path.join(tmp, "store")), "rb") as f:
@@ -256,6 +322,22 @@ def _one(name, heap, info):
         print(text.strip())
     print(json.dumps(r))
     return 0 if r["fail"] is None else 1
+
+
+def _one_pico(name, heap, info, tmp):
+    # one Pico minute: rp2040-full for frozen/loaded, the stock firmware with
+    # the buoy flashed for mpy (`--heap 0`: the whole heap)
+    if name == "boot_rp2040":
+        raise SystemExit("--heap works with frozen_rp2040, loaded_rp2040 and mpy_rp2040")
+    store = None
+    if name == "loaded_rp2040":
+        with open(seed_store(os.path.join(tmp, "store")), "rb") as f:
+            store = f.read()
+    if name == "mpy_rp2040":
+        img = os.path.join(tmp, "pico-flash.img")
+        pico.flash_image(pico.need("rp2040-stock"), img)
+        return pico.run_pico(pico.need("rp2040-stock"), heap or None, mpy=img, info=info)
+    return pico.run_pico(pico.need("rp2040-full"), heap or None, store=store, info=info)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,337 @@
+# The buoy's minute (footprint_minute) on its own chip: a Raspberry Pi Pico
+# (RP2040, Cortex-M0+) running MicroPython v1.28.0's rp2 firmware in the
+# rp2040js emulator (acomm_cpython.picoboard). The lockstep harness is
+# started through the raw REPL on the USB CDC port and speaks the protocol
+# over it, as run_qemu's does over the Cortex-M3's UART.
+#
+#   run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True) -> run_qemu's dict
+#   flash_image(stock_uf2, out)        the stock Pico's flash after `acomm flash`
+#   image_bytes(uf2)                   a firmware's size in flash
+#   pool_of(region) / region_of(pool)  the GC's table overhead
+#
+# A smaller heap on a fixed one. The rp2 port's heap is fixed by its linker
+# script (a GC pool of 245,888 bytes), so heap=T is made from Python. T
+# stands for a GC *region* of T bytes, tables included, as MICROPY_HEAP_SIZE
+# is on the qemu board. Its pool P = pool_of(T) is what gc_setup_area
+# (py/gc.c, v1.28.0) carves out of T bytes: 16-byte blocks, one byte of
+# allocation table per 4 blocks, one byte of finaliser table per 8 blocks
+# (rp2 and qemu both have finalisers and no weakrefs), and a gap byte.
+# Once the harness module is imported (as run_qemu's command does first),
+# after gc.collect(), one bytearray of (whole pool - P) bytes is made. It
+# takes the start of the big free run after what is allocated, whole, where
+# a smaller pool would have ended, and is never freed. What was allocated
+# at boot stays in P, as it is in the qemu board's heap_min:
+#   P = gc.mem_alloc() - the blocker's data + gc.mem_free()
+# both read after a collect with the blocker made (the "pool" of a run).
+# The blocker's 16-byte header, its name in __main__ and the longer command
+# (the figures printed around the import) are counted as used: measured on
+# the qemu board, 96 bytes more than run_qemu's command holds, so a heap_min
+# here is at most one 256-byte step high. The blocker's data is taken off
+# code, after_build and peak, so they compare with run_qemu's.
+#
+# peak=False: the harness's heap peak is not sampled each step (the bisection
+# only asks pass or fail). gc.mem_alloc() scans the whole allocation table:
+# 9 ms a call on the Pico, three times the node's own step, so a sampled
+# minute takes twice as long. A small stand-in for the gc module takes its
+# place in the harness; it is made before the blocker, its heap is measured
+# (the same command before and after) and given back to the pool and taken
+# off the figures, so it is not charged to the buoy.
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+from acomm_cpython import boardfiles
+from acomm_cpython.workloads.footprint_minute import BOARD, LOAD_PACKETS, SIM_MS, SerialPipe, judge, minute, result
+from acomm_cpython.workloads.footprint_runners import _read_until, put_files
+
+RUN_LIMIT_S = 600  # a Pico minute takes 1-2.5 minutes of wall time: past this it hung
+BLOCK = 16  # MICROPY_BYTES_PER_GC_BLOCK on both 32-bit ports
+HARNESS = os.path.join(boardfiles.repo_root(), "tools", "lockstep", "acomm_lockstep.py")
+
+
+def pool_of(region):
+    """The GC pool (bytes) that gc_init(start, start + region) makes on rp2 and qemu (finalisers, no weakrefs)."""
+    atb = (region - 1) * 8 // (8 + 8 * 4 // 8 + 8 * 4 * BLOCK)
+    return atb * 4 * BLOCK
+
+
+def region_of(pool):
+    """The smallest GC region (bytes, tables included) whose pool holds `pool` bytes."""
+    atb = -(-pool // (4 * BLOCK))
+    return atb * 4 * BLOCK + atb + 1 + (atb * 4 + 7) // 8
+
+
+def image_bytes(uf2):
+    """The size in flash of the image a UF2 file writes (its highest address less its lowest), by tools/uf2.py."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("acomm_uf2", os.path.join(boardfiles.repo_root(), "tools", "uf2.py"))
+    uf2mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(uf2mod)
+    with open(uf2, "rb") as f:
+        return len(uf2mod.read(f.read())[1])
+
+
+# the stand-in for gc in the harness: the real mem_alloc() for its two
+# figures (after the imports, after the build), 0 for each step's peak
+_STAND_IN = """class _G:
+    collect = gc.collect
+    mem_free = gc.mem_free
+    k = 2
+    @staticmethod
+    def mem_alloc():
+        if _G.k:
+            _G.k -= 1
+            return gc.mem_alloc()
+        return 0
+"""
+_ALLOC = "gc.collect()\nprint('ALLOC', gc.mem_alloc())"
+
+
+def _alloc(t):
+    return int(re.search(rb"ALLOC (\d+)", t.exec(_ALLOC)).group(1))
+
+
+def _command(heap, stand_in, info):
+    # the raw REPL command that starts the harness (run_qemu's, with the
+    # blocker and the figures around the import)
+    lines = ["gc.collect()", "print('HAR', gc.mem_alloc())", "import acomm_lockstep", "gc.collect()",
+             "print('HAR', gc.mem_alloc())"]
+    if heap is not None:
+        lines += ["_B = bytearray(max(0, gc.mem_alloc() + gc.mem_free() - %d))" % (pool_of(heap) + stand_in),
+                  "gc.collect()", "print('BLK', len(_B), gc.mem_alloc(), gc.mem_free())"]
+    else:
+        lines += ["print('BLK', 0, gc.mem_alloc(), gc.mem_free())"]
+    if stand_in:
+        lines += ["acomm_lockstep.gc = _G"]
+    lines += ["acomm_lockstep.main('/config.py', '/store', None, %r)" % bool(info)]
+    return "\n".join(lines)
+
+
+def run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True, seed=1, limit_s=RUN_LIMIT_S):
+    """One buoy minute on the emulated Pico running `uf2`.
+
+    heap: None for the Pico's whole heap, else a GC region of that many
+    bytes (see the header). store: the buoy's store file to start from
+    (seed_store), with Iridium down for the minute. mpy: a flash image
+    (flash_image) with the buoy's .mpy files under /lib and the harness as
+    /acomm_lockstep.mpy, for the stock firmware; each run starts from a copy
+    of it. peak=False: no peak sampled (see the header). -> run_qemu's dict,
+    plus "pool" (the heap's pool in bytes, see the header), "harness" (what
+    importing the harness took) and "free" (gc.mem_free() once the node is
+    built, without the blocker, the harness or the stand-in).
+    """
+    from acomm_cpython.picoboard import PicoBoard
+
+    cfg = boardfiles.load_config(boardfiles.board_path(BOARD))
+    tmp = tempfile.mkdtemp(prefix="acomm-footprint-pico-")
+    flash = None
+    if mpy:
+        flash = os.path.join(tmp, "flash.img")
+        shutil.copyfile(mpy, flash)
+    text = b""
+    r = None
+    stand_in = 0
+    deadline = time.monotonic() + limit_s
+    board = None
+    try:
+        board = PicoBoard(uf2, flash=flash)
+        t = board.transport()
+        t.serial.timeout = 30
+        t.enter_raw_repl(soft_reset=False)
+        put_files(t, store)
+        t.exec("import gc")
+        if not peak:
+            a0 = _alloc(t)
+            t.exec(_STAND_IN)
+            stand_in = _alloc(t) - a0
+        t.exec_raw_no_follow(_command(heap, stand_in, info))
+        pre = _read_until(t.serial, (b"LOCK", b"\x04>"), 120)
+        text = pre
+        if not pre.endswith(b"LOCK"):
+            raise EOFError("the harness did not start")
+        text = pre[:-4]
+        minute(SerialPipe(t.serial), cfg, seed, SIM_MS, deadline, iridium_down=store is not None)
+        t.serial.write(b"Q")
+        tail = _read_until(t.serial, (b"\x04>",), 60)
+        text += tail
+        r = result(tail.split(b"\x04")[0].decode(errors="replace"))
+        if b"\x04" in tail and tail.split(b"\x04")[1].strip():
+            r = None  # a traceback after the figures
+    except Exception as e:  # noqa: BLE001 - any failure of the board is a failed run
+        text += ("\n[host] %s: %s" % (type(e).__name__, e)).encode()
+    finally:
+        if board is not None:
+            board.stop()
+        shutil.rmtree(tmp, ignore_errors=True)
+    s = text.decode(errors="replace")
+    out = dict(r or {})
+    out.update(_board_figures(s, r, stand_in))
+    out["heap"] = heap
+    why = judge(r)
+    if why and "MemoryError" in s:
+        why = "MemoryError (%s)" % why
+    if why is None and store is not None and r["stored"] != LOAD_PACKETS + 1:
+        why = "the store holds %d packets (%d expected)" % (r["stored"], LOAD_PACKETS + 1)
+    out["fail"] = why
+    out["text"] = s
+    return out
+
+
+def _board_figures(s, r, stand_in):
+    # the figures the command printed before the harness's (see _command)
+    out = {}
+    har = re.findall(r"HAR (\d+)", s)
+    blk = re.search(r"BLK (\d+) (\d+) (\d+)", s)
+    if len(har) == 2:
+        out["harness"] = int(har[1]) - int(har[0])
+    if blk:
+        n, a, f = (int(x) for x in blk.groups())
+        data = -(-n // BLOCK) * BLOCK
+        out["pool"] = a - data - stand_in + f
+        if r:
+            for k in ("peak", "after_build", "code"):
+                out[k] = r[k] - data - stand_in
+            out["free"] = out["pool"] - out["after_build"] + out.get("harness", 0)
+    if r and stand_in:
+        out["peak"] = None  # not sampled
+    return out
+
+
+def flash_image(stock_uf2, out, log=None):
+    """Writes `out`: the Pico's 2 MiB flash after `acomm flash --board buoy_pico` onto `stock_uf2`, plus the harness.
+
+    The real command runs against the emulated board's USB port (armv6m
+    .mpy files under /lib, main.py and config.py at /). The harness goes
+    beside them as /acomm_lockstep.mpy, outside /lib, and /main.py is
+    removed: the harness builds the node itself, and a main.py would start
+    a second one at boot. -> seconds the flash took.
+    """
+    from acomm_cpython.flash import mpremote_command
+    from acomm_cpython.picoboard import PicoBoard
+
+    tmp = tempfile.mkdtemp(prefix="acomm-footprint-flash-")
+    try:
+        harness = os.path.join(tmp, "acomm_lockstep.mpy")
+        boardfiles.compile_mpy(HARNESS, harness, "armv6m", "acomm_lockstep.py")
+        if os.path.exists(out):
+            os.remove(out)
+        with PicoBoard(stock_uf2, flash=out) as b:
+            t0 = time.monotonic()
+            r = subprocess.run([sys.executable, "-c", "import sys\nfrom acomm_cpython.cli import main\nsys.exit(main())",
+                                "flash", "--board", BOARD, "--port", b.usb],
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=900)
+            took = time.monotonic() - t0
+            if r.returncode:
+                raise RuntimeError("acomm flash to the emulated Pico failed: %s" % r.stdout[-800:])
+            if log:
+                log(r.stdout.strip().splitlines()[-1])
+            r = subprocess.run(mpremote_command() + ["connect", b.usb, "fs", "cp", harness, ":acomm_lockstep.mpy", "+",
+                                                     "fs", "rm", ":main.py"],
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+            if r.returncode:
+                raise RuntimeError("copying the harness to the emulated Pico failed: %s" % r.stdout[-800:])
+            b.save()
+        return took
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+# --- the bench's RP2040 groups (footprint_workload --only NAME) ----------------
+
+ROOMY = 128 * 1024  # the roomy run's GC region, as the Cortex-M3's (footprint_workload.ROOMY)
+
+
+def need(name):
+    """build/firmware/NAME.uf2, else RuntimeError with the one line that says how to get it."""
+    from acomm_cpython.picoboard import firmware
+
+    p = firmware(name)
+    if p is None:
+        raise RuntimeError("no build/firmware/%s.uf2: build it with python3 tools/firmware.py build" % name)
+    return p
+
+
+def missing():
+    """None when the emulated Pico can run here, else one line saying what is missing."""
+    from acomm_cpython.picoboard import runner_available
+
+    return runner_available()
+
+
+def boot_figures(emit):
+    # cheap (one boot): the images' sizes in flash, and the heap the stock
+    # firmware leaves free at its REPL (littlefs formatted and mounted by its
+    # _boot.py; the raw REPL command's own bytecode counts as used)
+    from acomm_cpython.picoboard import PicoBoard
+
+    stock = need("rp2040-stock")
+    emit("flash_image_rp2040_stock_bytes", image_bytes(stock), "bytes")
+    emit("flash_image_buoy_pico_bytes", image_bytes(need("buoy_pico")), "bytes")
+    with PicoBoard(stock) as b:
+        t = b.transport()
+        t.enter_raw_repl(soft_reset=False)
+        free, alloc = (int(x) for x in t.exec("import gc\ngc.collect()\nprint(gc.mem_free(), gc.mem_alloc())").split())
+    emit("heap_free_boot_rp2040_stock_bytes", free, "bytes")
+    emit("heap_pool_rp2040_bytes", free + alloc, "bytes")
+
+
+# the first size the bisection tries: what the node holds once built and
+# this much more. The minimum was 6.8-8.1 KB above it on every board
+# measured (Cortex-M3 frozen and loaded, RP2040 frozen), so this one
+# passes and leaves a bracket of a few steps instead of a wide one
+FIRST_ABOVE_BUILD = 12 * 1024
+
+
+def frozen_figures(emit, bisect, say=None, store=None):
+    # rp2040-full (acomm and the harness frozen): a roomy run with the peak
+    # sampled, then the bisection between what the node holds once built
+    # (a pool that cannot work) and the roomy run's peak with 2 KiB of room
+    # (a pool that never needs to collect), trying FIRST_ABOVE_BUILD first;
+    # -> the roomy run's dict
+    full = need("rp2040-full")
+    name = "frozen_rp2040" + ("_loaded" if store is not None else "")
+    roomy = run_pico(full, ROOMY, store=store)
+    if roomy["fail"]:
+        raise RuntimeError("%s: the buoy's minute failed even at %d bytes: %s\n%s"
+                           % (name, ROOMY, roomy["fail"], roomy["text"][-1500:]))
+    hi = min(ROOMY, region_of(roomy["peak"]) + 2048)
+    first = region_of(roomy["after_build"] + FIRST_ABOVE_BUILD)
+    emit("heap_min_%s_bytes" % name, bisect(lambda h: run_pico(full, h, store=store, peak=False),
+                                            roomy["after_build"], hi, say, first), "bytes")
+    if store is None:
+        emit("heap_after_imports_%s_bytes" % name, roomy["code"], "bytes")
+    emit("heap_after_build_%s_bytes" % name, roomy["after_build"], "bytes")
+    emit("heap_peak_%s_bytes" % name, roomy["peak"], "bytes")
+    return roomy
+
+
+def mpy_figures(emit, tmp, store, say=None):
+    # the buoy as `acomm flash` installs it on the stock firmware, on the
+    # Pico's whole heap: empty, then holding the seeded store. The harness's
+    # .mpy is not the buoy's: what importing it took is measured apart and
+    # taken off (it is emitted too)
+    stock = need("rp2040-stock")
+    img = os.path.join(tmp, "pico-flash.img")
+    took = flash_image(stock, img)
+    if say:
+        say("acomm flash to the emulated Pico: %.0f s" % took)
+    board = boardfiles.board_path(BOARD)
+    emit("mpy_total_armv6m_bytes", boardfiles.mpy_total_bytes(board, "armv6m", os.path.join(tmp, "armv6m")), "bytes")
+    for loaded in (False, True):
+        r = run_pico(stock, None, store=store if loaded else None, mpy=img, peak=False)
+        if r["fail"]:
+            raise RuntimeError("mpy_rp2040: the buoy's minute failed on the whole heap: %s\n%s"
+                               % (r["fail"], r["text"][-1500:]))
+        if not loaded:
+            emit("heap_after_imports_mpy_rp2040_bytes", r["code"] - r["harness"], "bytes")
+            emit("heap_after_build_mpy_rp2040_bytes", r["after_build"] - r["harness"], "bytes")
+            emit("heap_harness_mpy_rp2040_bytes", r["harness"], "bytes")
+            emit("heap_free_mpy_rp2040_bytes", r["free"], "bytes")
+        else:
+            emit("heap_after_build_mpy_rp2040_loaded_bytes", r["after_build"] - r["harness"], "bytes")
+            emit("heap_free_mpy_rp2040_loaded_bytes", r["free"], "bytes")
