@@ -56,10 +56,9 @@ rp2040-emulator:
 # Every runtime runs and prints its own closing line: pytest on CPython,
 # then the core suite on the MicroPython unix port, on the Cortex-M3
 # firmware under qemu, on the i386 build and on the RP2040 firmware in its
-# emulator. The target fails if any fails. The two emulated boards need a
-# core of their own: once the firmware is built the RP2040's run and then
-# the Cortex-M3's go on beside pytest and the unix and i386 runs, and their
-# output is printed when they end.
+# emulator. The target fails if any fails. The RP2040's run is the longest
+# and needs one core of its own: it runs beside the Cortex-M3 and i386
+# runs, its output printed when it ends.
 # tools/browser.py installs Debian's chromium for the console's browser
 # test when it is missing and this runs as root (else the test skips).
 # When the firmware cannot be built on this machine (exit 3), its three
@@ -69,19 +68,15 @@ rp2040-emulator:
 I386_HEAP = 2M
 test: $(VENV)/.dev rp2040-emulator
 	@$(BIN)/python tools/firmware.py build; f=$$?; \
-	p=; rm -f build/rp2040-tests.rc build/cm3-tests.rc; if [ $$f -eq 0 ]; then \
-	  { $(BIN)/python tools/board_runtests.py --target rp2040 > build/rp2040-tests.log 2>&1; echo $$? > build/rp2040-tests.rc; \
-	    $(BIN)/python tools/board_runtests.py > build/cm3-tests.log 2>&1; echo $$? > build/cm3-tests.rc; } & p=$$!; \
-	fi; \
 	$(BIN)/python tools/browser.py; \
 	$(BIN)/python -m pytest -q tests; a=$$?; \
 	PATH="$(CURDIR)/$(BIN):$$PATH" $(BIN)/micropython tools/mp_runtests.py tests/core; b=$$?; \
 	c=0; d=0; e=0; \
 	if [ $$f -eq 0 ]; then \
+	  $(BIN)/python tools/board_runtests.py --target rp2040 > build/rp2040-tests.log 2>&1 & p=$$!; \
+	  $(BIN)/python tools/board_runtests.py; c=$$?; \
 	  build/firmware/micropython-i386 -X heapsize=$(I386_HEAP) tools/mp_runtests.py --frozen --name micropython-i386 tests/core; d=$$?; \
-	  wait $$p; cat build/cm3-tests.log build/rp2040-tests.log; \
-	  c=$$(cat build/cm3-tests.rc 2>/dev/null || echo 1); e=$$(cat build/rp2040-tests.rc 2>/dev/null || echo 1); \
-	  test $$e -eq 3 && e=0; \
+	  wait $$p; e=$$?; cat build/rp2040-tests.log; test $$e -eq 3 && e=0; \
 	elif [ $$f -eq 3 ]; then \
 	  echo "micropython-cortex-m3, micropython-i386, micropython-rp2040: skipped: the firmware cannot be built here (the firmware: line above says what is missing; then run make firmware)"; \
 	else \
