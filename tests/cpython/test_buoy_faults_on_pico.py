@@ -18,7 +18,8 @@
 #      time): every packet it acknowledged waits in its store and leaves
 #      over Iridium once it is plugged in.
 #   4. A full filesystem: what cannot be stored is not acknowledged; what
-#      was stored before still leaves.
+#      was stored before still leaves; and a flash full before the first
+#      boot leaves a buoy that runs and relays nothing.
 #
 # One flashed flash image is shared (copied per test); the emulator runs
 # with speed_cap=0, so the board's idle time costs no wall time. Every
@@ -493,3 +494,46 @@ def test_a_full_filesystem_refuses_new_packets_and_keeps_the_ones_it_holds(image
         text = ocean.console.text
         assert "Traceback" not in text and ocean.console.count(READY) == 1, text
         assert "OSError 28" in text, text  # ENOSPC, from the store's write
+
+
+@needs_pico
+def test_a_flash_full_before_the_first_boot_leaves_the_buoy_running_and_relaying_nothing(images, tmp_path):
+    # no room for the store at all: the node runs on a store that takes
+    # nothing (acomm_mp.start.open_store), says so, and refuses to relay
+    with _buoy(images["bare"], tmp_path) as (board, ocean):
+        diver = ocean.peer("diver")
+        relay = diver.send(ocean.w.now(), "shore", b"for shore, with no store at the buoy", 3600, 6)
+        own = diver.send(ocean.w.now(), "buoy", b"for the buoy itself", 600, 6)
+        assert ocean.run_until(lambda: own in _statuses(ocean, "diver", DELIVERED) and diver.stats["refused"],
+                               sim_ms=60000), (diver.stats, ocean.events("diver"), ocean.console.text)
+        assert relay not in _statuses(ocean, "diver", TRANSMITTED)
+        text = ocean.console.text
+        assert "acomm: no store at /data/acomm.store (OSError 28)" in text, text  # ENOSPC
+        s = board.stats()
+        assert s["resets"] == 0 and "Traceback" not in text and ocean.console.count(READY) == 1, (s, text)
+
+
+def test_open_store_on_a_flash_that_cannot_hold_it_gives_a_store_that_takes_nothing(tmp_path):
+    # the board port's side of the test above, on CPython: where the store's
+    # folder cannot be made, the board says so and gets a store with no room
+    from acomm.errors import StoreFull
+    from acomm.transport.packetstore import PacketStore
+    from acomm.transport.store import Store
+    from acomm_mp.start import open_store
+
+    (tmp_path / "data").write_text("a file where the store's folder goes")
+    said = []
+    st = open_store({"path": str(tmp_path / "data" / "acomm.store"), "capacity": 65536, "max_record": 256},
+                    said.append)
+    assert len(said) == 1 and said[0].startswith("acomm: no store at ") and "relaying nothing" in said[0], said
+    with pytest.raises(StoreFull):
+        st.put(1, b"x")
+
+    class P:
+        size, prio, medium = 10, 1, None
+
+    assert not PacketStore(st).room(P())  # not even an urgent packet
+    ok = open_store({"path": str(tmp_path / "ok" / "acomm.store"), "capacity": 65536, "max_record": 256},
+                    said.append)
+    assert isinstance(ok, Store) and len(said) == 1
+    ok.close()

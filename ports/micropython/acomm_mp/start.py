@@ -46,13 +46,29 @@ def _makedirs(path):
         at += "/" + p
         try:
             os.mkdir(at)
-        except OSError:
-            pass  # already there
+        except OSError as e:
+            try:
+                os.stat(at)  # already there
+            except OSError:
+                raise e  # not made: its own error (a full flash) says why
 
 
-def open_store(st):
-    _makedirs(st["path"])
-    return Store(st["path"], capacity_bytes=st["capacity"], max_record=st["max_record"])
+def open_store(st, say=print):
+    try:
+        _makedirs(st["path"])
+        return Store(st["path"], capacity_bytes=st["capacity"], max_record=st["max_record"])
+    except OSError as e:
+        # A flash that cannot hold the store (full before the store was
+        # ever made, or failing) must not stop the board at boot: main.py
+        # would end at the REPL with no node and no watchdog, at every
+        # power-up. The node runs on a store that takes nothing: packets
+        # for this board are still delivered (they are never stored), but
+        # a packet to relay is refused ("receiver full"), so nothing is
+        # acknowledged that a reset would lose.
+        from acomm.transport.memorystore import MemoryStore
+
+        say("acomm: no store at %s (%s %s): relaying nothing" % (st["path"], type(e).__name__, e))
+        return MemoryStore(capacity_bytes=0, max_record=st["max_record"])
 
 
 def load_config(config):
