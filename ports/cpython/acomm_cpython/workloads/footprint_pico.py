@@ -16,26 +16,20 @@
 # (py/gc.c, v1.28.0) carves out of T bytes: 16-byte blocks, one byte of
 # allocation table per 4 blocks, one byte of finaliser table per 8 blocks
 # (rp2 and qemu both have finalisers and no weakrefs), and a gap byte.
-# Once the harness module is imported (as run_qemu's command does first),
-# after gc.collect(), one bytearray of (whole pool - P) bytes is made. It
-# takes the start of the big free run after what is allocated, whole, where
-# a smaller pool would have ended, and is never freed. What was allocated
-# at boot stays in P, as it is in the qemu board's heap_min:
-#   P = gc.mem_alloc() - the blocker's data + gc.mem_free()
-# both read after a collect with the blocker made (the "pool" of a run).
-# The blocker's 16-byte header, its name in __main__ and the longer command
-# (the figures printed around the import) are counted as used: measured on
-# the qemu board, 96 bytes more than run_qemu's command holds, so a heap_min
-# here is at most one 256-byte step high. The blocker's data is taken off
-# code, after_build and peak, so they compare with run_qemu's.
-#
-# peak=False: the harness's heap peak is not sampled each step (the bisection
-# only asks pass or fail). gc.mem_alloc() scans the whole allocation table:
-# 9 ms a call on the Pico, three times the node's own step, so a sampled
-# minute takes twice as long. A small stand-in for the gc module takes its
-# place in the harness; it is made before the blocker, its heap is measured
-# (the same command before and after) and given back to the pool and taken
-# off the figures, so it is not charged to the buoy.
+# First thing at the REPL, after gc.collect(), the GC's own bounds are cut
+# to P (_SHRINK, with machine.mem32): its allocation table's length and the
+# pool's end, in the mp_state_mem_area_t that gc_init filled, found by its
+# five words (table start, table length n, finaliser table at start + n + 1,
+# pool start, pool end = start + 64 n). Its blocks keep their places, so
+# what was allocated at boot stays in P, as in the qemu board's heap_min;
+# nothing may be allocated above the new end (checked). The heap then acts
+# as a T-byte region's would: the same blocks, collections over P alone.
+# (A blocker bytearray allocated first gave the same figure, 49,408 frozen,
+# but every gc.collect() scanned its 190 KB: 13.3 ms a collection against
+# 0.5 ms, so a minute near the edge, collecting every few allocations, took
+# 25 minutes.) The command that starts the harness prints the heap around
+# the import, so it holds 48 bytes more than run_qemu's (measured on the
+# qemu board): within the 256-byte step.
 import os
 import re
 import shutil
@@ -96,25 +90,65 @@ _STAND_IN = """class _G:
 """
 _ALLOC = "gc.collect()\nprint('ALLOC', gc.mem_alloc())"
 
+# finds the GC's mp_state_mem_area_t (see the header) -> its address, or 0
+_FIND = """import machine
+m = machine.mem32
+n = (gc.mem_alloc() + gc.mem_free()) // 64
+a = 0x20000004
+while a < 0x20042000 and not (m[a] == n and m[a + 4] == m[a - 4] + n + 1 and m[a + 12] - m[a + 8] == n * 64):
+    a += 4
+print('AREA', a - 4 if a < 0x20042000 else 0)
+m = n = a = None
+"""
+# cuts the pool to k * 64 bytes: table length and pool end; the next free
+# table index back to 0 if it lies past the end. Short, so that its bytecode
+# (which lives while it runs, above what its parsing took) sits low in the
+# pool: nothing allocated may lie past the new end (the highest used block,
+# from the last collection, is checked)
+_CUT = """gc.collect()
+m = machine.mem32
+a = %d
+k = %d
+if m[a + 24] < k * 4 and m[a + 16] - m[a + 12] == m[a + 4] * 64:
+    m[a + 4] = k
+    m[a + 16] = m[a + 12] + k * 64
+    if m[a + 20] >= k:
+        m[a + 20] = 0
+m = a = k = None
+gc.collect()
+print('SHRUNK', gc.mem_alloc() + gc.mem_free())
+"""
+
+
+class SetupError(RuntimeError):
+    """The run could not be set up as asked: not a pass, nor a heap too small."""
+
 
 def _alloc(t):
     return int(re.search(rb"ALLOC (\d+)", t.exec(_ALLOC)).group(1))
 
 
-def _command(heap, stand_in, info):
-    # the raw REPL command that starts the harness (run_qemu's, with the
-    # blocker and the figures around the import)
-    lines = ["gc.collect()", "print('HAR', gc.mem_alloc())", "import acomm_lockstep", "gc.collect()",
-             "print('HAR', gc.mem_alloc())"]
-    if heap is not None:
-        lines += ["_B = bytearray(max(0, gc.mem_alloc() + gc.mem_free() - %d))" % (pool_of(heap) + stand_in),
-                  "gc.collect()", "print('BLK', len(_B), gc.mem_alloc(), gc.mem_free())"]
-    else:
-        lines += ["print('BLK', 0, gc.mem_alloc(), gc.mem_free())"]
-    if stand_in:
-        lines += ["acomm_lockstep.gc = _G"]
-    lines += ["acomm_lockstep.main('/config.py', '/store', None, %r)" % bool(info)]
-    return "\n".join(lines)
+def _shrink(t, pool):
+    # -> None once the pool is `pool` bytes, else why not (something lives
+    # past the new end: a heap too small). SetupError when
+    # the GC's bounds are not where gc_init leaves them (another firmware)
+    addr = int(re.search(rb"AREA (\d+)", t.exec(_FIND)).group(1))
+    if not addr:
+        raise SetupError("the Pico's GC heap bounds were not found: not MicroPython v1.28's rp2 layout?")
+    got = int(re.search(rb"SHRUNK (\d+)", t.exec(_CUT % (addr, pool // 64))).group(1))
+    if got != pool:
+        # the REPL compiles each command above what it parsed: at about 30 KB
+        # on this firmware, far below any heap the buoy fits in
+        return "what the board holds before the harness (its firmware's and its REPL's) reaches past a %d-byte pool" % pool
+    return None
+
+
+def _command(info):
+    # the raw REPL command that starts the harness (run_qemu's, with the heap
+    # printed around the import: what the harness took)
+    return "\n".join(["gc.collect()", "print('HAR', gc.mem_alloc())", "import acomm_lockstep", "gc.collect()",
+                      "print('HAR', gc.mem_alloc(), gc.mem_free())", "acomm_lockstep.gc = _G",
+                      "acomm_lockstep.main('/config.py', '/store', None, %r)" % bool(info)])
 
 
 def run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True, seed=1, limit_s=RUN_LIMIT_S):
@@ -128,7 +162,7 @@ def run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True, seed=1
     of it. peak=False: no peak sampled (see the header). -> run_qemu's dict,
     plus "pool" (the heap's pool in bytes, see the header), "harness" (what
     importing the harness took) and "free" (gc.mem_free() once the node is
-    built, without the blocker, the harness or the stand-in).
+    built, without the harness or the stand-in).
     """
     from acomm_cpython.picoboard import PicoBoard
 
@@ -148,13 +182,22 @@ def run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True, seed=1
         t = board.transport()
         t.serial.timeout = 30
         t.enter_raw_repl(soft_reset=False)
-        put_files(t, store)
-        t.exec("import gc")
+        # the heap is cut first, while only what the firmware allocated at
+        # boot lives (low in the pool: nothing above the new end); only the
+        # stand-in comes before, so its heap can be given back
+        t.exec("import gc\n_G = gc")
         if not peak:
             a0 = _alloc(t)
             t.exec(_STAND_IN)
             stand_in = _alloc(t) - a0
-        t.exec_raw_no_follow(_command(heap, stand_in, info))
+        if heap is not None:
+            # the GC's pool comes in 64-byte steps: the stand-in gets back
+            # what fits in them, and the buoy is short of the rest (< 64 B)
+            cut = _shrink(t, pool_of(heap) + stand_in // 64 * 64)
+            if cut:
+                raise EOFError(cut)
+        put_files(t, store)
+        t.exec_raw_no_follow(_command(info))
         pre = _read_until(t.serial, (b"LOCK", b"\x04>"), 120)
         text = pre
         if not pre.endswith(b"LOCK"):
@@ -167,6 +210,8 @@ def run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True, seed=1
         r = result(tail.split(b"\x04")[0].decode(errors="replace"))
         if b"\x04" in tail and tail.split(b"\x04")[1].strip():
             r = None  # a traceback after the figures
+    except SetupError:
+        raise
     except Exception as e:  # noqa: BLE001 - any failure of the board is a failed run
         text += ("\n[host] %s: %s" % (type(e).__name__, e)).encode()
     finally:
@@ -190,20 +235,17 @@ def run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True, seed=1
 
 
 def _board_figures(s, r, stand_in):
-    # the figures the command printed before the harness's (see _command)
+    # the figures the command printed before the harness's (see _command):
+    # the stand-in is not the buoy's, nor is it in the pool it was given
     out = {}
-    har = re.findall(r"HAR (\d+)", s)
-    blk = re.search(r"BLK (\d+) (\d+) (\d+)", s)
+    har = re.findall(r"HAR (\d+)(?: (\d+))?", s)
     if len(har) == 2:
-        out["harness"] = int(har[1]) - int(har[0])
-    if blk:
-        n, a, f = (int(x) for x in blk.groups())
-        data = -(-n // BLOCK) * BLOCK
-        out["pool"] = a - data - stand_in + f
+        out["harness"] = int(har[1][0]) - int(har[0][0])
+        out["pool"] = int(har[1][0]) + int(har[1][1]) - stand_in
         if r:
             for k in ("peak", "after_build", "code"):
-                out[k] = r[k] - data - stand_in
-            out["free"] = out["pool"] - out["after_build"] + out.get("harness", 0)
+                out[k] = r[k] - stand_in
+            out["free"] = out["pool"] - out["after_build"] + out["harness"]
     if r and stand_in:
         out["peak"] = None  # not sampled
     return out

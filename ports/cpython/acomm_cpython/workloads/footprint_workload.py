@@ -15,8 +15,8 @@
 #       bytearray first thing, whose size is taken off), mpy (the .mpy files
 #       `acomm flash` copies, under /lib on the board's littlefs). where:
 #       cortex_m (qemu Cortex-M3), i386 or rp2040 (the Pico's firmware in
-#       the rp2040js emulator; its heap is fixed, so a smaller one is made
-#       by a blocker allocated first: footprint_pico's header says how, and
+#       the rp2040js emulator; its heap is fixed by the linker, so the GC's
+#       bounds are cut from Python: footprint_pico's header says how, and
 #       how the figure still counts the GC region with its tables).
 #   heap_after_imports_* / heap_after_build_*   gc.mem_alloc() once every
 #       module the buoy runs is imported / once its node is built (roomy heap)
