@@ -218,9 +218,12 @@ def test_the_watchdog_is_fed_while_the_loop_runs_and_resets_the_board_when_it_st
         assert ocean.run_until(lambda: board.stats()["watchdog_resets"] == 1, sim_ms=3 * wd), board.stats()
         s = board.stats()
         assert s["resets"] == 1 and s["ctl_resets"] == 0 and s["machine_resets"] == 0, s
-        # the watchdog's own timeout (the board's clock), not some other reset:
-        # the last feed came before the Ctrl-C was typed
-        assert s["last_reset_ms"] - (stopped + ocean.sim0) <= wd + 1000, (s, stopped)
+        # the watchdog's own timeout on the board's clock, not some other
+        # reset: the loop fed it up to the Ctrl-C (typed at `stopped`, read
+        # by the board a little later), and never after
+        after = s["last_reset_ms"] - (stopped + ocean.sim0)
+        print("watchdog reset %d ms after the Ctrl-C (watchdog_ms %d)" % (after, wd))
+        assert wd - 1000 <= after <= wd + 1000, (s, stopped)
         # and the buoy starts again from main.py
         assert ocean.run_until(lambda: ocean.console.count(READY) == 2, sim_ms=10000), ocean.console.text
 
