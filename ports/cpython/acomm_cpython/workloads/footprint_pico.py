@@ -16,20 +16,30 @@
 # (py/gc.c, v1.28.0) carves out of T bytes: 16-byte blocks, one byte of
 # allocation table per 4 blocks, one byte of finaliser table per 8 blocks
 # (rp2 and qemu both have finalisers and no weakrefs), and a gap byte.
-# First thing at the REPL, after gc.collect(), the GC's own bounds are cut
-# to P (_SHRINK, with machine.mem32): its allocation table's length and the
-# pool's end, in the mp_state_mem_area_t that gc_init filled, found by its
-# five words (table start, table length n, finaliser table at start + n + 1,
-# pool start, pool end = start + 64 n). Its blocks keep their places, so
-# what was allocated at boot stays in P, as in the qemu board's heap_min;
-# nothing may be allocated above the new end (checked). The heap then acts
-# as a T-byte region's would: the same blocks, collections over P alone.
-# (A blocker bytearray allocated first gave the same figure, 49,408 frozen,
-# but every gc.collect() scanned its 190 KB: 13.3 ms a collection against
-# 0.5 ms, so a minute near the edge, collecting every few allocations, took
-# 25 minutes.) The command that starts the harness prints the heap around
-# the import, so it holds 48 bytes more than run_qemu's (measured on the
-# qemu board): within the 256-byte step.
+# First thing at the raw REPL, after gc.collect(), the GC's own bounds are
+# cut to P (_FIND, _CUT, with machine.mem32): its allocation table's length
+# and the pool's end, in the mp_state_mem_area_t that gc_init filled, found
+# by five words (table start, table length n, finaliser table at start +
+# n + 1, pool start, pool end = start + 64 n). The blocks keep their places,
+# so what was allocated at boot stays in P, as in the qemu board's
+# heap_min; nothing may live past the new end (checked: the REPL's
+# commands sit near 30 KB, so a pool below that cannot be made, and the
+# run fails, as the buoy would). The heap then acts as a T-byte region's:
+# the same blocks, collections over P alone. (A blocker bytearray
+# allocated first gave the same figure, 49,408 frozen, but each
+# gc.collect() scanned its 190 KB: 13.3 ms a collection against 0.5 ms, so
+# a minute near the edge, collecting every few allocations, took 25
+# minutes.) The command that starts the harness prints the heap around the
+# import: it holds 48 bytes more than run_qemu's (measured on the qemu
+# board), within the 256-byte step.
+#
+# peak=False: the harness's heap peak is not sampled each step (the
+# bisection only asks pass or fail): gc.mem_alloc() scans the whole
+# allocation table, 9 ms a call on the whole Pico heap, three times the
+# node's own step. A small stand-in for the gc module takes its place in
+# the harness; made before the cut, its heap is measured (the same command
+# before and after), given back to the pool (to the 64-byte step) and taken
+# off the figures, so it is not charged to the buoy.
 import os
 import re
 import shutil
