@@ -8,6 +8,10 @@ CONFIG = {
     "name": "buoy",
     "node_id": 1,
     "arch": "armv6m",  # mpy-cross -march for the RP2040 (Cortex-M0+)
+    # the .mpy files `acomm flash` copies carry no line numbers: 4 KB more
+    # heap for your own code on the stock firmware (buoy_pico.uf2 has them
+    # frozen, with their lines, at no heap cost); True while debugging
+    "mpy_lines": False,
     "peers": {"diver": 2, "shore": 3, "auv": 4},
     "routes": {},
     # 64 KiB of the Pico's flash filesystem for packets waiting to be sent

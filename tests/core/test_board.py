@@ -52,6 +52,12 @@ def test_both_boards_check_and_fill_defaults():
     buoy = check(_config("buoy_pico"))
     assert [lk["modem"] for lk in buoy["links"]] == ["seatrac", "iridium"]
     assert buoy["arch"] == "armv6m" and buoy["station"] is None
+    # mpy_lines (acomm flash's choice) stays in the checked copy only when False
+    c = _config("buoy_pico")
+    c["mpy_lines"] = True
+    assert "mpy_lines" not in check(c)
+    c["mpy_lines"] = False
+    assert check(c)["mpy_lines"] is False
 
 
 def test_a_wrong_field_is_named():
@@ -80,6 +86,9 @@ def test_a_wrong_field_is_named():
     c = _copy(base)
     c["arch"] = "z80"
     assert "arch" in _error(c)
+    c = _copy(base)
+    c["mpy_lines"] = 0
+    assert "mpy_lines" in _error(c)
     c = _copy(base)
     c["peers"] = {"diver": 1}  # the board's own id
     assert "peers.diver" in _error(c)

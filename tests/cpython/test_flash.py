@@ -5,6 +5,7 @@
 # no fake board: the device side is checked through a stand-in for mpremote.
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -143,10 +144,22 @@ def test_x64_mpy_imports_on_the_unix_port(tmp_path, board):
             # the viper CRC stays behind (FROZEN_ONLY): the table one runs
             "from acomm.codec import crc\n"
             "assert crc.crc16 is crc.crc16_pure and crc.crc16(b'123456789') == 0xBB3D\n"
+            # a traceback names the module; its line only where the config keeps lines
+            "import io\n"
+            "try:\n"
+            "    crc.crc16(None)\n"
+            "except TypeError as e:\n"
+            "    s = io.StringIO()\n"
+            "    sys.print_exception(e, s)\n"
+            "    print(s.getvalue())\n"
             "print('IMPORTED')\n") % (drivers, sorted(set(d.rpartition(".")[2] for d in drivers)))
     env = dict(os.environ, MICROPYPATH=str(dev / "lib") + ":.frozen")
     r = subprocess.run([mp, "-c", code], cwd=str(tmp_path), env=env, capture_output=True, text=True, timeout=30)
     assert r.returncode == 0 and "IMPORTED" in r.stdout, r.stdout + r.stderr
+    # each .mpy is named by its module (no qstr of its own); lines as configured
+    line = int(re.search(r'File "acomm\.codec\.crc", line (\d+), in crc16_pure', r.stdout).group(1))
+    lines = boardfiles.load_config(os.path.join(BOARDS, board)).get("mpy_lines", True)
+    assert (line > 1) == lines, (board, r.stdout)
     # a driver the board does not have is not there
     other = sorted(_ALL_DRIVERS - set(drivers))[0]
     r = subprocess.run([mp, "-c", "import " + other], cwd=str(tmp_path), env=env, capture_output=True, text=True,

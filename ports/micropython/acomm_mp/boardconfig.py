@@ -10,6 +10,10 @@
 #   node_id       1..254 (255 is broadcast)
 #   arch          mpy-cross -march of the MCU (armv6m for an RP2040,
 #                 xtensawin for an ESP32-S3); `acomm flash` reads it
+#   mpy_lines     absent or True: the .mpy files `acomm flash` copies keep
+#                 their line numbers; False: none (tracebacks name the
+#                 module and function only), about 4 KB less heap for the
+#                 buoy's modules loaded from flash (no effect when frozen)
 #   peers         {name: node id} of the other nodes it talks to
 #   routes        {final destination: next hop}, both known names
 #   storage       {"path", "capacity", "max_record"} of the packet store on
@@ -167,6 +171,11 @@ def check(cfg):
     if arch not in ARCHES:
         _fail("arch", "one of " + ", ".join(ARCHES), arch)
     out["arch"] = arch
+    lines = cfg.get("mpy_lines", True)
+    if lines is not True and lines is not False:
+        _fail("mpy_lines", "True or False", lines)
+    if not lines:  # absent otherwise: the checked config stays as it was
+        out["mpy_lines"] = False
     peers = _dict(cfg, "peers", "peers", {})
     for k in peers:
         v = peers[k]
@@ -222,6 +231,6 @@ def check(cfg):
     if w is not None:  # absent otherwise: the buoy's checked config stays as it was
         out["web"] = w
     for k in cfg:
-        if k not in out and k != "web":
+        if k not in out and k not in ("web", "mpy_lines"):
             _fail("CONFIG", "known fields only", k)
     return out
