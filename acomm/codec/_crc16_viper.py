@@ -2,8 +2,10 @@
 # only on MicroPython, and only if the build has the viper emitter.
 import micropython
 
+from ._crc16_table import TABLE_LE
 
-def make_crc16(table):
+
+def make_crc16(table=TABLE_LE):
     @micropython.viper
     def _crc16(data, crc: int) -> int:
         t = ptr16(table)  # noqa: F821 (viper builtin)

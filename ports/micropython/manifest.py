@@ -31,6 +31,7 @@ package(
         "catalog/seaware.py",
         "catalog/teleop.py",
         "codec/__init__.py",
+        "codec/_crc16_table.py",
         "codec/_crc16_viper.py",
         "codec/bits.py",
         "codec/compress.py",
