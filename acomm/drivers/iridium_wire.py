@@ -18,8 +18,7 @@ MO_SUCCESS_MAX = const(4)  # 3-4 are "reserved, success" (ISU reference, goby3, 
 # of (code, text) pairs took 20 tuples and their strings (frozen, either
 # stays in flash). Read only to explain a failed session.
 _MO_STATUS = (
-    "0:MO sent;1:MO sent, MT too big for the MT buffer;2:MO sent, location update not accepted;"
-    "3:MO sent (reserved);4:MO sent (reserved);10:call did not complete in the allowed time;"
+    "10:call did not complete in the allowed time;"
     "11:MO message queue at the gateway is full;12:MO message has too many segments;"
     "13:session did not complete;14:invalid segment size;15:access denied;16:transceiver locked;"
     "17:gateway not responding;18:RF drop;19:protocol error;32:no network service;33:antenna fault;"
@@ -28,7 +27,9 @@ _MO_STATUS = (
 
 
 def mo_status_name(code):
-    """What +SBDIX MO status `code` means."""
+    """What +SBDIX MO status `code` means ("MO sent" for 0..MO_SUCCESS_MAX: the driver explains failures only)."""
+    if 0 <= code <= MO_SUCCESS_MAX:
+        return "MO sent"
     for item in _MO_STATUS.split(";"):
         c, text = item.split(":", 1)
         if int(c) == code:

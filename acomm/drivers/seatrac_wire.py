@@ -52,22 +52,6 @@ def status_name(code):
 _HEX = b"0123456789ABCDEF"
 
 
-# The value of each byte as an uppercase hex digit, 0..15; 0xFF for every
-# other byte: the protocol is uppercase only, so lowercase hex marks a
-# damaged line. A bytes constant, which stays in flash when frozen (a table
-# built at import took 272 B of a board's heap); test_name_tables checks it.
-HEXVAL = (
-    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
-    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\x00\x01\x02\x03\x04\x05\x06\x07\x08\x09\xff\xff\xff\xff\xff\xff"
-    b"\xff\x0a\x0b\x0c\x0d\x0e\x0f\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
-    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
-    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
-    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
-    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
-    b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
-)
-
-
 def encode_into(out, sync, msg, n):
     # Writes the line for the binary message msg[:n] (CID + payload) into the
     # bytearray `out`; returns its length. No allocation but the memoryview.
@@ -112,12 +96,19 @@ class LineReader(SyncLines):
             return
         line = self._line
         msg = self._msg
-        hv = HEXVAL
         m = n >> 1
         for i in range(m):
-            hi = hv[line[2 * i]]
-            lo = hv[line[2 * i + 1]]
-            if hi > 15 or lo > 15:
+            # '0'-'9' -> 0..9, 'A'-'F' -> 10..15; anything else, lowercase
+            # included (the protocol is uppercase only), marks a damaged
+            # line. Worked out, not looked up: a 256-byte table was 288 B
+            # of a board's heap when its modules load from flash
+            hi = line[2 * i] - 48
+            if hi > 9:
+                hi = hi - 7 if hi > 16 else 16
+            lo = line[2 * i + 1] - 48
+            if lo > 9:
+                lo = lo - 7 if lo > 16 else 16
+            if hi < 0 or lo < 0 or hi > 15 or lo > 15:
                 self._junk(_JUNK_HEX)
                 return
             msg[i] = (hi << 4) | lo

@@ -5,6 +5,7 @@
 from acomm import events as ev
 from acomm.transport import segment as sg
 from acomm.drivers import iridium_wire, seatrac_wire
+from acomm.drivers import seatrac_codes as sc
 
 
 def test_status_and_availability_names_sit_at_their_codes():
@@ -26,15 +27,39 @@ def test_refusal_and_modem_status_names_and_unknown_codes():
     # every row of the packed tables, and codes that fall between them
     assert seatrac_wire.status_name(0x3A) == "XCVR_STATE_STOPPED" and seatrac_wire.status_name(0x3F) == "XCVR_STATE_RESP"
     assert seatrac_wire.status_name(0x02) == "CST_0x02"
-    assert iridium_wire.mo_status_name(35) == "transceiver busy" and iridium_wire.mo_status_name(1).startswith("MO sent, MT")
+    assert iridium_wire.mo_status_name(35) == "transceiver busy" and iridium_wire.mo_status_name(1) == "MO sent"
     assert iridium_wire.mo_status_name(31) == "reserved failure"
 
 
-def test_the_seatrac_hex_table_is_uppercase_hex_and_nothing_else():
-    # written out as a constant (it stays in flash): 0..15 at '0'-'9' and
-    # 'A'-'F', 0xFF everywhere else (lowercase included)
-    hv = seatrac_wire.HEXVAL
-    assert len(hv) == 256
+def test_the_seatrac_reader_takes_uppercase_hex_and_nothing_else():
+    # every byte value in a hex position of a good line: the 16 uppercase
+    # digits decode (the original passes, the others fail the CRC), any
+    # other byte (lowercase included) is not hex; sync and line ends cut
+    class Sink:
+        def __init__(self):
+            self.got = 0
+            self.kinds = []
+
+        def on_message(self, b, n):
+            self.got += 1
+
+        def on_junk(self, kind):
+            self.kinds.append(kind)
+
+    good = b"$4000028015"  # PING status, CRC 0x1580
     digits = b"0123456789ABCDEF"
-    for c in range(256):
-        assert hv[c] == (digits.index(bytes((c,))) if bytes((c,)) in digits else 0xFF), c
+    for pos in (1, 2, 9, 10):
+        for c in range(256):
+            if c in (sc.SYNC_RSP, 10, 13):  # the sync byte, line ends
+                continue
+            line = bytearray(good)
+            line[pos] = c
+            s = Sink()
+            r = seatrac_wire.LineReader(sc.SYNC_RSP, s)
+            r.feed(bytes(line) + b"\r\n")
+            if c == good[pos]:
+                assert s.got == 1 and not s.kinds, (pos, c)
+            elif c in digits:
+                assert s.got == 0 and s.kinds == [sc.JUNK_CRC], (pos, c, s.kinds)
+            else:
+                assert s.got == 0 and s.kinds == [sc.JUNK_HEX], (pos, c, s.kinds)
