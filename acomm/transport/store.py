@@ -11,7 +11,13 @@
 #                      same key. Raises StoreFull when it would exceed
 #                      capacity_bytes even after compaction, EncodeError for
 #                      a bad key or an over-long record.
-#   s.delete(key)      appends a tombstone; an unknown key is ignored.
+#                      A filesystem too full for the record (ENOSPC) is
+#                      StoreFull too: the caller refuses what it cannot keep.
+#   s.delete(key)      appends a tombstone; an unknown key is ignored. On a
+#                      filesystem too full for the tombstone the record
+#                      leaves the index at once and the file at the next
+#                      compaction that fits (counted in delete_deferred):
+#                      a reset before then brings it back.
 #   s.get(key)         -> bytes, or None (unknown, or found corrupt on read:
 #                      then it is dropped and counted in corrupt_dropped).
 #   s.keys()           -> live keys in the order of their last put(), which
@@ -72,6 +78,7 @@ _HDR = const(8)  # sync, kind, key u32, length u16
 _OVER = const(12)  # header + CRC-32
 _MIN_DEAD = const(256)  # below this, compacting costs more than it frees
 _CHUNK = const(128)  # read buffer for recovery and compaction
+_ENOSPC = const(28)  # errno of a full filesystem (Linux, MicroPython, Windows)
 
 _fsync = getattr(os, "fsync", None)  # CPython
 _ossync = getattr(os, "sync", None)  # some MicroPython ports
@@ -117,7 +124,8 @@ class Store:
         self.capacity_bytes = capacity_bytes
         self.max_record = max_record
         self._sync = sync
-        self.stats = {"appends": 0, "deletes": 0, "compactions": 0, "torn_dropped": 0, "corrupt_dropped": 0}
+        self.stats = {"appends": 0, "deletes": 0, "compactions": 0, "torn_dropped": 0, "corrupt_dropped": 0,
+                      "delete_deferred": 0}
         self._keys = bytearray()  # u32 LE per live record, in file order
         self._locs = bytearray()  # offset u32 + data length u16 per record
         self._buf = bytearray(_CHUNK)
@@ -148,12 +156,20 @@ class Store:
             # An older record with this key stays in the compacted file: it
             # must survive a cut before the new one is complete.
             if self.dead_bytes:
-                self.compact()
+                self._compact_if_room()
             if self.used_bytes + need > self.capacity_bytes:
                 raise StoreFull("store full")
         hdr = struct.pack("<BBIH", _SYNC, _PUT, key, n)
         off = self.used_bytes
-        self._append_record(hdr, data, crc32(data, crc32(hdr)))
+        try:
+            self._append_record(hdr, data, crc32(data, crc32(hdr)))
+        except OSError as e:
+            # the capacity fits but the filesystem does not (other files,
+            # a small flash): a refusal, as above, never a crash. Nothing
+            # moved: the next record overwrites what was written
+            if e.args and e.args[0] == _ENOSPC:
+                raise StoreFull("filesystem full")
+            raise
         j = self._find(key)
         if j >= 0:
             self._drop(j)
@@ -172,10 +188,20 @@ class Store:
             # No room for a tombstone: rewrite the file without the record.
             # A cut leaves the old file or the new one, either is right.
             self._drop(j)
-            self.compact()
+            if not self._compact_if_room():
+                self.stats["delete_deferred"] += 1
         else:
             hdr = struct.pack("<BBIH", _SYNC, _DEL, key, 0)
-            self._append_record(hdr, b"", crc32(hdr))
+            try:
+                self._append_record(hdr, b"", crc32(hdr))
+            except OSError as e:
+                if not e.args or e.args[0] != _ENOSPC:
+                    raise
+                # no room for the tombstone on the filesystem: forgotten
+                # now, gone from the file at the next compaction that fits
+                self._drop(j)
+                self.stats["delete_deferred"] += 1
+                return
             self._drop(j)
             self.dead_bytes += _OVER
         self.stats["deletes"] += 1
@@ -330,7 +356,18 @@ class Store:
 
     def _maybe_compact(self):
         if self.dead_bytes > _MIN_DEAD and 2 * self.dead_bytes > self.used_bytes:
+            self._compact_if_room()
+
+    def _compact_if_room(self):
+        # -> False when the filesystem has no room for the rewritten copy
+        # (compact() leaves the store as it was then); other errors raise
+        try:
             self.compact()
+        except OSError as e:
+            if e.args and e.args[0] == _ENOSPC:
+                return False
+            raise
+        return True
 
     def _copy(self, off, n, g):
         f = self._f

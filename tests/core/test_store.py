@@ -391,3 +391,84 @@ def test_record_bytes_as_documented():
         assert _read(d.file()) == MAGIC + bytes.fromhex(
             "a55007000000020068695411" "2fe7" "a544070000000000" "5357ce2a"
         )
+
+
+def _failing(errno):
+    def f(*args):
+        raise OSError(errno)
+
+    return f
+
+
+def _fill_up(s):
+    # the filesystem under s is full from now on: an append writes a torn
+    # start of its record, as a full flash leaves it, then fails (ENOSPC)
+    f = s._f
+
+    def append(hdr, data, crc):
+        f.seek(s.used_bytes)
+        f.write(hdr[:5])
+        f.flush()
+        raise OSError(28)
+
+    s._append_record = append
+    s.compact = _failing(28)
+
+
+def _room_again(s):
+    del s._append_record
+    del s.compact
+
+
+def test_a_full_filesystem_refuses_a_put_and_keeps_what_was_there():
+    with _Dir() as d:
+        s = Store(d.file())
+        s.put(1, _data(1))
+        _fill_up(s)
+        raises(StoreFull, s.put, 2, _data(2))
+        assert s.keys() == [1] and s.get(1) == _data(1) and s.get(2) is None
+        # other OSErrors are not a full store
+        s._append_record = _failing(5)
+        assert not isinstance(raises(OSError, s.put, 2, _data(2)), StoreFull)
+        _room_again(s)
+        s.put(2, _data(2))  # over the torn start
+        s.close()
+        s = Store(d.file())
+        assert s.keys() == [1, 2] and s.get(2) == _data(2) and s.stats["torn_dropped"] == 0
+        s.close()
+
+
+def test_a_full_filesystem_defers_a_delete_until_a_compaction_fits():
+    with _Dir() as d:
+        s = Store(d.file())
+        for k in (1, 2, 3):
+            s.put(k, _data(k))
+        _fill_up(s)
+        s.delete(2)  # no tombstone fits: forgotten now, not raised
+        assert s.keys() == [1, 3] and s.get(2) is None and s.stats["delete_deferred"] == 1
+        s.close()
+        s = Store(d.file())
+        assert s.keys() == [1, 2, 3]  # a reset before a compaction brings it back
+        s.delete(2)
+        _fill_up(s)
+        s.delete(3)
+        _room_again(s)
+        s.compact()  # room again: the deferred delete reaches the file
+        s.close()
+        s = Store(d.file())
+        assert s.keys() == [1]
+        s.close()
+
+
+def test_a_compaction_with_no_room_does_not_fail_the_put_that_asked_for_it():
+    with _Dir() as d:
+        s = Store(d.file(), capacity_bytes=100000)
+        for v in range(40):  # dead bytes pile up past half the file
+            s.put(7, _data(7, v))
+            if v == 20:
+                s.compact = _failing(28)
+        assert s.get(7) == _data(7, 39) and s.dead_bytes > s.used_bytes // 2
+        del s.compact
+        s.put(7, _data(7, 40))
+        assert s.stats["compactions"] >= 1 and s.dead_bytes == 0
+        s.close()
