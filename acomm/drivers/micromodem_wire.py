@@ -113,8 +113,12 @@ class LineReader(SyncLines):
     # (valid until the next feed). Damaged lines are dropped, counted in
     # self.junk and reported to sink.on_junk(kind). One preallocated buffer;
     # nothing is allocated per byte.
+    _k_text = JUNK_TEXT
+    _k_cut = JUNK_TRUNCATED
+    _k_long = JUNK_OVERLONG
+
     def __init__(self, sink, cap=MAX_LINE, csum32=CSUM32_VERIFY, need_checksum=True):
-        SyncLines.__init__(self, 0x24, sink, cap, JUNK_TEXT, JUNK_TRUNCATED, JUNK_OVERLONG)
+        SyncLines.__init__(self, 0x24, sink, cap)
         self.csum32 = csum32
         self.need_checksum = need_checksum
         self.sentences = 0

@@ -81,8 +81,12 @@ class LineReader(SyncLines):
     # Good messages go to sink.on_message(buf, n) with buf[0] the CID and n
     # counting CID + payload; everything else is dropped, counted and
     # reported to sink.on_junk(kind). Two preallocated buffers; no allocation per byte.
+    _k_text = _JUNK_TEXT
+    _k_cut = _JUNK_TRUNCATED
+    _k_long = _JUNK_OVERLONG
+
     def __init__(self, sync, sink, max_msg=_MAX_MSG):
-        SyncLines.__init__(self, sync, sink, 2 * max_msg, _JUNK_TEXT, _JUNK_TRUNCATED, _JUNK_OVERLONG)
+        SyncLines.__init__(self, sync, sink, 2 * max_msg)
         self._msg = bytearray(max_msg)
         self.messages = 0
 

@@ -49,7 +49,7 @@ from . import segment as sg
 from .arq import Outgoing, Reassembly
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, StoreFull
-from .packetstore import PacketStore
+from .packetstore import PacketStore, key_of
 from .route import MEDIUM_ALL, Router
 
 # these modules' codes, as private constants (inlined: no slot in this
@@ -88,18 +88,21 @@ _REPORT_NEW_ROUND = const(2)
 _REPORT_REPOLL = const(3)
 
 class _Packet:
-    # A packet this node sends or relays. Made with key, origin, final, pid,
-    # prio, expiry, body, compressed, medium, relayed and size; its transfer's
-    # state starts at the class's defaults below. On MicroPython an instance's
-    # attribute table grows by one reallocation at a time (8 for 22 names set
-    # at once, the last of 184 B): the allocations a relaying buoy, its heap
-    # fragmented, failed first. With the defaults a new packet sets 11.
+    # A packet this node sends or relays. Made with origin, final, pid, prio,
+    # expiry, body, medium, relayed and size (compressed when it is); its
+    # transfer's state starts at the class's defaults below. On MicroPython
+    # an instance's attribute table grows by one reallocation at a time (8
+    # for 22 names set at once, the last of 184 B): the allocations a
+    # relaying buoy, its heap fragmented, failed first. With the defaults a
+    # packet waiting in the store sets 10 (chunks too): 80 B of table, where
+    # 12 took 96, on every packet a buoy holds while its uplink is down.
     out = link = hop = timer = polled = wait = group = None
     inflight = polling = misses = chunks = 0
+    compressed = False
 
 
 # every field, for a copy of a packet (MEDIUM_ALL)
-_FIELDS = ("key", "origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link", "hop",
+_FIELDS = ("origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link", "hop",
            "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks", "size")
 
 
@@ -180,7 +183,6 @@ class Transport:
         except StoreFull:
             # refused below; the id is not reserved, but nothing went out with it
             p.pid = self.packets.pid = (self.packets.pid + 1) & 0xFFFF
-        p.key = (p.origin << 16) | p.pid
         self.stats["sent"] += 1
         if not self._keep(p):
             self.stats["failed"] += 1
@@ -194,9 +196,10 @@ class Transport:
 
     def _packet(self, origin, final, pid, prio, expiry, body, compressed, medium):
         p = _Packet()
-        p.key = (origin << 16) | pid
         p.origin, p.final, p.pid, p.prio, p.expiry = origin, final, pid, prio, expiry
-        p.body, p.compressed, p.medium = body, compressed, medium
+        p.body, p.medium = body, medium
+        if compressed:
+            p.compressed = True
         p.relayed = origin != self.node_id
         # only the origin compresses: a relay forwards the body as the
         # origin chose it (a second try would not shrink it and costs a
@@ -318,7 +321,7 @@ class Transport:
         # a queued packet's body is in the store (_keep, _recover): the
         # fragments are read back as they go
         head = sg.packet_header(p.pid, p.size, p.compressed, relay)
-        blob = self.packets.blob(p.key, head)
+        blob = self.packets.blob(key_of(p), head)
         if blob is None or len(blob) != len(head) + p.size:
             self._final(now, p, _FAILED, "lost from the store")
             return

@@ -50,6 +50,11 @@ _F_MEDIUM = const(2)
 _META_ROOM = const(2 * (_REC_OVERHEAD + 2) + 2 * (_REC_OVERHEAD + 3 * DONE_MEMORY))
 
 
+def key_of(p):
+    """The key of chunk 0 of packet p (origin and pid) in the store."""
+    return (p.origin << 16) | p.pid
+
+
 class Stored:
     # what recover() gives back for each packet
     # body is None: the transport reads it back (blob()) when it sends the packet
@@ -166,22 +171,24 @@ class PacketStore:
             head += bytes((len(m),)) + m
         first = self.chunk - len(head)
         body = p.body
+        key = key_of(p)
         try:
             for i in range(1, chunks):
                 a = first + (i - 1) * self.chunk
-                self.store.put((i << 24) | p.key, body[a : a + self.chunk])
-            self.store.put(p.key, head + body[:first])
+                self.store.put((i << 24) | key, body[a : a + self.chunk])
+            self.store.put(key, head + body[:first])
         except StoreFull:
             for i in range(1, chunks):
-                self.store.delete((i << 24) | p.key)
+                self.store.delete((i << 24) | key)
             raise
 
     def delete(self, p):
         # p.chunks: what put() or recover() found (a copy of an "all"
         # packet has another medium than the record)
-        self.store.delete(p.key)
+        key = key_of(p)
+        self.store.delete(key)
         for i in range(1, p.chunks):
-            self.store.delete((i << 24) | p.key)
+            self.store.delete((i << 24) | key)
 
     def body(self, key):
         """The stored body of the packet with this key, read back from the store; None when it is gone or damaged."""

@@ -8,7 +8,7 @@ from acomm.transport.arq import Outgoing
 from acomm.errors import StoreFull
 from acomm.events import DELIVERED, EXPIRED, FAILED, QUEUED, TRANSMITTED
 from acomm.transport.memorystore import MemoryStore
-from acomm.transport.packetstore import PacketStore
+from acomm.transport.packetstore import PacketStore, key_of
 from acomm.prng import Prng
 from acomm.transport.store import Store
 from acomm.transport import Transport
@@ -69,7 +69,7 @@ def test_a_packet_whose_body_the_store_lost_fails_with_a_reason():
     store = MemoryStore(max_record=256)
     w, a, b, _, ta = net(stores={"diver": store})
     pid = ta.send(w.now(), "buoy", Prng(5).bytes(300), 3600, 5)  # random: two records
-    store.delete((1 << 24) | ta._out[0].key)  # its second record rots away before it is sent
+    store.delete((1 << 24) | key_of(ta._out[0]))  # its second record rots away before it is sent
     assert w.run(600000, until=lambda: FAILED in statuses(a, pid))
     assert not packets(b) and ta.pending() == []
 
@@ -84,7 +84,7 @@ def test_a_stored_blob_reads_what_the_joined_packet_holds():
         body = Prng(3).bytes(300)
         p = _stored_packet(ps, body, medium)
         head = b"HEADER!"
-        blob = ps.blob(p.key, head)
+        blob = ps.blob(key_of(p), head)
         whole = head + body
         assert len(blob) == len(whole)
         for n in (1, 5, 27, 64, 100, 400):
@@ -97,7 +97,7 @@ def _stored_packet(ps, body, medium):
 
     p = Stored()
     p.origin, p.final, p.pid, p.prio, p.expiry, p.compressed, p.medium = 1, 2, 9, 5, 1000, False, medium
-    p.body, p.size, p.key = body, len(body), (1 << 16) | 9
+    p.body, p.size = body, len(body)
     ps.put(p)
     return p
 
@@ -107,7 +107,7 @@ def test_a_record_lost_mid_transfer_fails_the_packet_once():
     w, a, b, _, ta = net(loss=1.0, stores={"diver": store})  # nothing arrives: the transfer goes on
     pid = ta.send(w.now(), "buoy", Prng(6).bytes(400), 3600, 5)  # random: 7 records
     w.run(600000, until=lambda: ta.stats["fragments"] >= 2)
-    key = ta._out[0].key
+    key = key_of(ta._out[0])
     store.delete((6 << 24) | key)  # a record of its tail rots away while it is sent
     w.channel.loss = 0.0
     assert w.run(1200000, until=lambda: FAILED in statuses(a, pid))
@@ -219,7 +219,7 @@ def test_a_cut_put_leaves_no_half_packet():
     ta.send(w.now(), "buoy", Prng(2).bytes(300), 3600, 5)  # 5 records
     keys = st.keys()
     assert len(keys) == 6  # 5 chunks and the packet id limit
-    del st._d[ta._out[0].key]  # chunk 0 is written last: cut before it
+    del st._d[key_of(ta._out[0])]  # chunk 0 is written last: cut before it
     t2 = _restart(a, w, st)
     assert t2.pending() == [] and st.keys() == [0xFFFFFF]
 

@@ -105,7 +105,6 @@ p.origin, p.final, p.pid, p.prio, p.compressed, p.medium = %(diver)d, %(shore)d,
 p.expiry = int(time.time()) + 86400
 p.body = %(body)r
 p.size = len(p.body)
-p.key = (p.origin << 16) | p.pid
 ps.put(p)
 for k in range(4):
     ps.save_done([(%(auv)d, 100 * k + j) for j in range(32)])
