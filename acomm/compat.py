@@ -43,27 +43,25 @@ _TICKS_HALF = const(1 << 29)
 IS_MICROPYTHON = hasattr(time, "ticks_ms")
 
 
-def _py_ticks_add(ticks, delta):
-    # ticks + delta in the domain; |delta| < 2**29 (OverflowError otherwise)
-    if not -_TICKS_HALF < delta < _TICKS_HALF:
-        raise OverflowError("ticks interval overflow")
-    return (ticks + delta) & TICKS_MAX
-
-
-def _py_ticks_diff(a, b):
-    # Signed distance a - b in the circular domain, in [-2**29, 2**29).
-    return ((a - b + _TICKS_HALF) & TICKS_MAX) - _TICKS_HALF
-
-
 if IS_MICROPYTHON and time.ticks_add(0, -1) == TICKS_MAX:
     # The board's own ticks already wrap at 2**30: use the C versions, which
-    # do not allocate.
+    # do not allocate (and the Python ones below are never made: on a board
+    # that loads its modules from flash they would take heap for nothing).
     ticks_add = time.ticks_add
     ticks_diff = time.ticks_diff
     ticks_ms = time.ticks_ms
 else:
-    ticks_add = _py_ticks_add
-    ticks_diff = _py_ticks_diff
+
+    def ticks_add(ticks, delta):
+        # ticks + delta in the domain; |delta| < 2**29 (OverflowError otherwise)
+        if not -_TICKS_HALF < delta < _TICKS_HALF:
+            raise OverflowError("ticks interval overflow")
+        return (ticks + delta) & TICKS_MAX
+
+    def ticks_diff(a, b):
+        # Signed distance a - b in the circular domain, in [-2**29, 2**29).
+        return ((a - b + _TICKS_HALF) & TICKS_MAX) - _TICKS_HALF
+
     if IS_MICROPYTHON:
         # The unix port wraps at 2**62, a multiple of 2**30: masking keeps
         # the arithmetic consistent.

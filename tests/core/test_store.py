@@ -6,7 +6,8 @@ from collections import OrderedDict
 
 from checks import TempDir, raises, skip
 
-from acomm.codec.crc32 import crc32, crc32_pure
+from acomm.codec._crc32_pure import crc32_pure
+from acomm.codec.crc32 import crc32
 from acomm.errors import AcommError, EncodeError, StoreError, StoreFull
 from acomm.prng import Prng
 from acomm.transport.store import MAGIC, Store

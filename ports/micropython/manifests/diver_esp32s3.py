@@ -24,6 +24,7 @@ package(
         "codec/__init__.py",
         "codec/_crc16_table.py",
         "codec/_crc16_viper.py",
+        "codec/_crc32_pure.py",
         "codec/bits.py",
         "codec/compress.py",
         "codec/crc.py",
