@@ -114,6 +114,7 @@ package(
         "__init__.py",
         "assemble.py",
         "boardconfig.py",
+        "runasync.py",
         "runloop.py",
         "start.py",
         "uartstream.py",

@@ -5,10 +5,9 @@
 # the node carries on at the next tick (the store still holds every packet).
 #
 # run_blocking() is what acomm_mp.start runs on a board: a plain loop that
-# sleeps what is left of each step. run() is the same loop as an asyncio
-# task, for an application whose other tasks (a display, buttons) share
-# the loop; asyncio is imported only there, because on a 64 KiB heap its
-# module objects cost about 2.3 KiB that a relay has no use for.
+# sleeps what is left of each step. acomm_mp.runasync.run() is the same
+# loop as an asyncio task, in its own module: a relay loads neither it nor
+# asyncio (on a 64 KiB heap asyncio's module objects cost about 2.3 KiB).
 
 import gc
 
@@ -81,13 +80,3 @@ def run_blocking(board, clock=ticks_ms, sleep_ms=None, stop=None):
         if left > 0:
             sleep_ms(left)
 
-
-async def run(board, clock=ticks_ms, stop=None):
-    """The same loop as an asyncio task: other tasks run while it sleeps."""
-    import asyncio
-
-    s = getattr(asyncio, "sleep_ms", None)
-    step = board.cfg["step_ms"]
-    while stop is None or not stop():
-        board.tick(clock())
-        await (s(step) if s is not None else asyncio.sleep(step / 1000))

@@ -1,6 +1,6 @@
 # The console on a MicroPython board (a diver's tablet with Wi-Fi): what
 # acomm_mp.start runs instead of its plain loop when the board's config has
-# a `web` field. One asyncio loop runs the node (acomm_mp.runloop.run), the
+# a `web` field. One asyncio loop runs the node (acomm_mp.runasync.run), the
 # console's poll and the microdot server; no thread, no lock. The network
 # must be up already (boot.py joins the Wi-Fi: that is the board's own).
 #
@@ -13,7 +13,7 @@ def serve(board, web, stop=None):
 
     from acomm.apps.console import ConsoleState
     from acomm.compat import ticks_ms
-    from acomm_mp.runloop import run
+    from acomm_mp.runasync import run
 
     from .server import WebConsole, tee
 
