@@ -20,7 +20,7 @@ ACOMM = os.path.join(os.path.dirname(sys.executable), "acomm")
 _missing = picobuoy.missing()
 FIGURES = ("rp2040_buoy_relayed_packets", "rp2040_buoy_lost_packets", "rp2040_buoy_duplicate_packets",
            "rp2040_buoy_resets", "rp2040_flash_seconds", "rp2040_boot_to_ready_ms",
-           "rp2040_first_boot_to_ready_ms")
+           "rp2040_first_boot_to_ready_ms", "rp2040_buoy_heap_free_bytes", "rp2040_buoy_heap_free_after_reset_bytes")
 
 
 @pytest.fixture(scope="module")
@@ -55,6 +55,10 @@ def test_the_figures(board):
         assert 0 < v[k] < 8000, v
     assert figures["rp2040_boot_to_ready_ms"]["unit"] == "ms"
     assert figures["rp2040_flash_seconds"]["unit"] == "s"
+    # the Pico's GC pool is 245,888 bytes: the buoy from .mpy files leaves
+    # about half of it
+    for k in ("rp2040_buoy_heap_free_bytes", "rp2040_buoy_heap_free_after_reset_bytes"):
+        assert 100000 < v[k] < 245888, v
 
 
 def test_the_diver_report_reached_shore_once(board):

@@ -11,6 +11,7 @@
 # module go once the checked copy is made: the two copies would otherwise
 # both stay on the heap for ever (1.3 KiB for the buoy).
 
+import gc
 import os
 import time
 
@@ -98,7 +99,12 @@ def start(config, make_report=None, machine=None):
     release_builder()  # needed once: the builder's code and the modem table go back to the heap
     if cfg["watchdog_ms"] and hasattr(machine, "WDT"):
         board.wdt = machine.WDT(timeout=cfg["watchdog_ms"])
-    print("acomm %s: node %d, links %s" % (cfg["name"], cfg["node_id"], ", ".join(board.node.links)))
+    # the heap the board's own code is left with, counted after a collection
+    # (the build's garbage gone): what an operator checks at the console
+    gc.collect()
+    free = getattr(gc, "mem_free", None)
+    print("acomm %s: node %d, links %s%s" % (cfg["name"], cfg["node_id"], ", ".join(board.node.links),
+                                            "; %d B heap free" % free() if free else ""))
     if cfg.get("web") is not None:
         # the console runs the node in asyncio beside its server; imported
         # by a name the flash closure does not follow: a board gets

@@ -18,6 +18,12 @@
 #                                  buoy's ready line (imports, node built)
 #   rp2040_first_boot_to_ready_ms  the same for the boot after the flash
 #                                  (a machine.reset(), from mpremote)
+#   rp2040_buoy_heap_free_bytes    what the buoy's ready line says is left of
+#                                  the Pico's heap after a collection, at
+#                                  its first boot (store empty): the buoy as
+#                                  `acomm flash` installs it, nothing else
+#   rp2040_buoy_heap_free_after_reset_bytes   the same after the power
+#                                  cycle, its store holding the diver's packet
 #
 # ACOMM_BOARD_RUN=FILE also writes the whole run (what shore received, the
 # buoy's store records, the Iridium sessions, the consoles) to FILE as JSON,
@@ -25,6 +31,7 @@
 # firmware this fails with one line saying what is missing.
 import json
 import os
+import re
 import sys
 
 PER_RUNTIME = ()
@@ -52,3 +59,13 @@ def run(emit):
     emit("rp2040_flash_seconds", round(r["flash_seconds"], 2), "s")
     emit("rp2040_boot_to_ready_ms", round(r["boot_to_ready_ms"], 1), "ms")
     emit("rp2040_first_boot_to_ready_ms", round(r["first_boot_ms"], 1), "ms")
+    free = heap_free(r["buoy_console"])
+    if len(free) < 2:
+        raise RuntimeError("the buoy's ready lines give no free heap: %r" % r["buoy_console"][-6:])
+    emit("rp2040_buoy_heap_free_bytes", free[0], "bytes")
+    emit("rp2040_buoy_heap_free_after_reset_bytes", free[1], "bytes")
+
+
+def heap_free(lines):
+    """The free heap (bytes) each ready line of a board's console reports ("...; N B heap free"), in order."""
+    return [int(m.group(1)) for m in (re.search(r": node \d+, links .*; (\d+) B heap free", x) for x in lines) if m]
