@@ -89,16 +89,17 @@ _REPORT_REPOLL = const(3)
 
 class _Packet:
     # A packet this node sends or relays. Made with origin, final, pid, prio,
-    # expiry, body, medium, relayed and size (compressed when it is); its
-    # transfer's state starts at the class's defaults below. On MicroPython
-    # an instance's attribute table grows by one reallocation at a time (8
-    # for 22 names set at once, the last of 184 B): the allocations a
-    # relaying buoy, its heap fragmented, failed first. With the defaults a
-    # packet waiting in the store sets 10 (chunks too): 80 B of table, where
-    # 12 took 96, on every packet a buoy holds while its uplink is down.
-    out = link = hop = timer = polled = wait = group = None
+    # expiry and size (body, medium, compressed and relayed when they are not
+    # the defaults); its transfer's state starts at the class's defaults
+    # below. On MicroPython an instance's attribute table grows by one
+    # reallocation at a time (8 for 22 names set at once, the last of 184 B):
+    # the allocations a relaying buoy, its heap fragmented, failed first.
+    # With the defaults a packet waiting in the store sets 8 (chunks too):
+    # 64 B of table, where 12 took 96, on every packet a buoy holds while
+    # its uplink is down.
+    out = link = hop = timer = polled = wait = group = body = medium = None
     inflight = polling = misses = chunks = 0
-    compressed = False
+    compressed = relayed = False
 
 
 # every field, for a copy of a packet (MEDIUM_ALL)
@@ -143,7 +144,9 @@ class Transport:
                       "fragments": 0, "resent": 0, "sacks": 0, "rx_bad": 0, "rx_dup": 0, "refused": 0, "refused_unauthed": 0,
                       "store_full": 0, "failovers": 0}
         self._rx = {}  # (link name, src id, lane) -> Reassembly
-        self._done = []  # (origin, pid) delivered here lately
+        # (origin, pid) pairs delivered or relayed here lately, 3 bytes each
+        # as the store keeps them: 32 tuples in a list took 640 B of heap
+        self._done = bytearray()
         self._sacks = {}  # link request id -> (link, neighbour id, SACK bytes, tries)
         self._quiet = False  # the segment at hand is unsealed, strict mode: no SACK for it
         self._recover()
@@ -197,10 +200,16 @@ class Transport:
     def _packet(self, origin, final, pid, prio, expiry, body, compressed, medium):
         p = _Packet()
         p.origin, p.final, p.pid, p.prio, p.expiry = origin, final, pid, prio, expiry
-        p.body, p.medium = body, medium
+        # set only when not the class's default: a packet back from the
+        # store (no body in RAM, no medium) keeps 8 attributes, 64 B of table
+        if body is not None:
+            p.body = body
+        if medium is not None:
+            p.medium = medium
         if compressed:
             p.compressed = True
-        p.relayed = origin != self.node_id
+        if origin != self.node_id:
+            p.relayed = True
         # only the origin compresses: a relay forwards the body as the
         # origin chose it (a second try would not shrink it and costs a
         # relay its compression tables, 2.5 KiB, on every packet)
@@ -254,7 +263,7 @@ class Transport:
             p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, None, s.compressed, s.medium)
             p.chunks, p.size = s.chunks, s.size
             self._queue(p)
-        self._done = self.packets.done[-_DONE_MEMORY:]
+        self._done = bytearray(self.packets.done[-3 * _DONE_MEMORY :])
 
     # -- statuses --------------------------------------------------------------------
     def _status(self, p, status, reason):
@@ -642,13 +651,13 @@ class Transport:
             # a relay keeps the body as the origin sent it: it is not
             # decompressed here (the fragments' CRCs already vouch for the
             # bytes, and the destination checks the rest)
-            if (origin, h.pid) not in self._done:
+            if not self._is_done(origin, h.pid):
                 p = self._packet(origin, final, h.pid, prio, self.wall() + life, body, h.compressed, None)
                 if not self._keep(p):
                     return False
                 self.stats["relayed"] += 1
                 self._remember(origin, h.pid)
-        elif (origin, h.pid) in self._done:
+        elif self._is_done(origin, h.pid):
             self.stats["rx_dup"] += 1
         else:
             data = body
@@ -686,10 +695,21 @@ class Transport:
         r.header = None
         return True
 
+    def _is_done(self, origin, pid):
+        # whether (origin, pid) is among the pairs remembered: a hit must
+        # start on a pair's boundary (the pattern can straddle two pairs)
+        d = self._done
+        pat = bytes((origin, pid >> 8, pid & 0xFF))
+        i = d.find(pat)
+        while i >= 0 and i % 3:
+            i = d.find(pat, i + 1)
+        return i >= 0
+
     def _remember(self, origin, pid, save=True):
-        self._done.append((origin, pid))
-        if len(self._done) > _DONE_MEMORY:
-            self._done.pop(0)
+        d = self._done
+        d.extend(bytes((origin, pid >> 8, pid & 0xFF)))
+        if len(d) > 3 * _DONE_MEMORY:
+            d[0:3] = b""
         if save:
             self._save_done()
 

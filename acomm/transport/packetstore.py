@@ -114,7 +114,7 @@ class PacketStore:
         self.chunk = min(getattr(store, "max_record", 65535), 65535)
         self.pid = 0
         self._limit = 0  # ids up to here are covered by the stored limit
-        self.done = []  # (origin, pid) delivered lately, as recover() found them
+        self.done = b""  # (origin, pid) pairs delivered lately, 3 bytes each, as recover() found them
 
     def _sizes(self, p):
         # p.size: the body's length (the body itself may be in the store only)
@@ -144,15 +144,9 @@ class PacketStore:
         return pid
 
     def save_done(self, done):
-        # done: [(origin, pid)], at most DONE_MEMORY of them
-        b = bytearray(3 * len(done))
-        i = 0
-        for o, pid in done:
-            b[i] = o
-            b[i + 1] = pid >> 8
-            b[i + 2] = pid & 0xFF
-            i += 3
-        self.store.put(_DONE, bytes(b))  # the room for it is kept (_META_ROOM)
+        # done: the delivered pairs as this record holds them, 3 bytes each
+        # (origin, pid high, pid low), at most DONE_MEMORY of them
+        self.store.put(_DONE, bytes(done))  # the room for it is kept (_META_ROOM)
 
     def put(self, p):
         # raises StoreFull (nothing of the packet stays then)
@@ -217,7 +211,7 @@ class PacketStore:
                     self._limit = self.pid = (m[0] << 8) | m[1]
             elif k == _DONE:
                 m = st.get(k) or b""
-                self.done = [(m[i], (m[i + 1] << 8) | m[i + 2]) for i in range(0, len(m) - 2, 3)]
+                self.done = m[: len(m) - len(m) % 3]
             elif k >> 24 == 0:
                 heads[k] = True
         out = []

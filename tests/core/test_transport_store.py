@@ -302,3 +302,16 @@ def test_a_restarted_receiver_does_not_deliver_a_resent_packet_twice():
     assert w.run(600000, until=lambda: statuses(a, pid).count(DELIVERED) == 2)
     assert len(packets(b)) == 1
     assert b.node.transport.stats["rx_dup"] == 1
+
+
+def test_the_delivered_pairs_are_kept_as_the_store_keeps_them():
+    # 3 bytes a pair, the last 32: a pair is found only on a pair's
+    # boundary (bytes 1..3 of 01 01 02 | 03 04 05 are not a pair)
+    w, a, b, _, ta = net()
+    ta._remember(1, 0x0102, False)
+    ta._remember(3, 0x0405, False)
+    assert ta._is_done(1, 0x0102) and ta._is_done(3, 0x0405)
+    assert not ta._is_done(1, 0x0203) and not ta._is_done(2, 0x0304)
+    for k in range(40):
+        ta._remember(9, k, False)
+    assert len(ta._done) == 3 * 32 and not ta._is_done(1, 0x0102) and ta._is_done(9, 39) and not ta._is_done(9, 7)
