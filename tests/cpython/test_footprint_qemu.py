@@ -26,3 +26,19 @@ def test_one_lockstep_minute_on_the_cortex_m3_board():
 def test_a_heap_too_small_is_a_failure_not_a_pass():
     r = fr.run_qemu(ELF, 24 * 1024)
     assert r["fail"] is not None and "MemoryError" in r["fail"]
+
+
+def test_a_minute_from_a_romfs_image_at_the_boards_partition(tmp_path):
+    # the buoy's .mpy files in a ROMFS image loaded at the board's ROMFS
+    # partition and mounted by its _boot.py (v1.28's qemu port has no
+    # vfs.rom_ioctl: the partition is mounted from memory): its imports take
+    # far less heap than the same files from littlefs, which copy their code
+    harness = firmware("cm3-harness")
+    if harness is None:
+        pytest.skip("build/firmware/cm3-harness.elf not built")
+    st = fr.Staged(str(tmp_path), "armv7m")
+    rom = fr.run_qemu(harness, 128 * 1024, rom=st.rom())
+    assert rom["fail"] is None, rom["text"][-2000:]
+    lfs = fr.run_qemu(harness, 192 * 1024, flash=st.lfs())
+    assert lfs["fail"] is None, lfs["text"][-2000:]
+    assert rom["code"] + 32 * 1024 < lfs["code"], (rom["code"], lfs["code"])

@@ -49,11 +49,21 @@ def _mount():
     if "/lib" not in sys.path:  # where `acomm flash` puts modules, as on a Pico
         sys.path.append("/lib")
     try:
-        # an image loaded with qemu's -device loader at the ROMFS partition
-        vfs.mount(vfs.VfsRom(vfs.rom_ioctl(2, 0)), "/rom")
+        # an image loaded with qemu's -device loader at the ROMFS partition;
+        # v1.28's qemu port has VfsRom but no vfs.rom_ioctl, so the 4 MiB
+        # partition is given as it lies in memory (VfsRom reads the image's
+        # own length from its header, and refuses memory with no image)
+        rom = getattr(vfs, "rom_ioctl", None)
+        if rom is not None:
+            part = rom(2, 0)
+        else:
+            import uctypes
+
+            part = uctypes.bytearray_at(0x21000000, 0x400000)
+        vfs.mount(vfs.VfsRom(part), "/rom")
         sys.path.insert(1, "/rom/lib")
         sys.path.insert(1, "/rom")
-    except (OSError, AttributeError):
+    except (OSError, ValueError, AttributeError):
         pass
 
 
