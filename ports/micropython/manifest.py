@@ -114,6 +114,7 @@ package(
         "__init__.py",
         "assemble.py",
         "boardconfig.py",
+        "boot.py",
         "runasync.py",
         "runloop.py",
         "start.py",

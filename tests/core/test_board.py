@@ -7,7 +7,7 @@
 from acomm.catalog import caddy
 from acomm_sim.fakeuart import FakeUART
 from acomm.prng import Prng
-from acomm_mp import start as mpstart
+from acomm_mp import boot as mpboot
 from acomm_mp.assemble import build
 from acomm_mp.boardconfig import ConfigError, check
 from acomm_mp.uartstream import UartStream
@@ -219,7 +219,7 @@ class _Machine:
 
 def test_machine_uart_is_normalised():
     lk = check(_config("buoy_pico"))["links"][1]
-    s = mpstart.open_uart(_Machine, lk)
+    s = mpboot.open_uart(_Machine, lk)
     assert s.uart.uid == 1 and s.uart.kw["baudrate"] == 19200 and s.uart.kw["tx"].n == 4
     assert lk["rxbuf"] == 256  # 100 ms at 19200 baud is less: the floor
     assert check(_config("buoy_pico"))["links"][0]["rxbuf"] == 1152  # SeaTrac, 115200 baud
@@ -250,7 +250,7 @@ def test_the_config_module_is_released_once_checked():
     import sys
 
     from acomm_mp.runloop import run_blocking
-    from acomm_mp.start import load_config
+    from acomm_mp.boot import load_config
 
     class _Module:
         CONFIG = _config("buoy_pico")

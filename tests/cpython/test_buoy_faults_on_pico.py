@@ -501,7 +501,7 @@ def test_a_full_filesystem_refuses_new_packets_and_keeps_the_ones_it_holds(image
 @needs_pico
 def test_a_flash_full_before_the_first_boot_leaves_the_buoy_running_and_relaying_nothing(images, tmp_path):
     # no room for the store at all: the node runs on a store that takes
-    # nothing (acomm_mp.start.open_store), says so, and refuses to relay
+    # nothing (acomm_mp.boot.open_store), says so, and refuses to relay
     with _buoy(images["bare"], tmp_path) as (board, ocean):
         diver = ocean.peer("diver")
         relay = diver.send(ocean.w.now(), "shore", b"for shore, with no store at the buoy", 3600, 6)
@@ -521,7 +521,7 @@ def test_open_store_on_a_flash_that_cannot_hold_it_gives_a_store_that_takes_noth
     from acomm.errors import StoreFull
     from acomm.transport.packetstore import PacketStore
     from acomm.transport.store import Store
-    from acomm_mp.start import open_store
+    from acomm_mp.boot import open_store
 
     (tmp_path / "data").write_text("a file where the store's folder goes")
     said = []

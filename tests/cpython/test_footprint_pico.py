@@ -94,3 +94,19 @@ def test_the_boot_group_through_acomm_bench():
     # most of its heap free
     assert 200000 < got["flash_image_rp2040_stock_bytes"] < got["flash_image_buoy_pico_bytes"] < 640 * 1024
     assert 200000 < got["heap_free_boot_rp2040_stock_bytes"] < got["heap_pool_rp2040_bytes"]
+
+
+def test_the_buoy_flashed_to_a_stock_pico_reports_its_free_heap_at_boot(tmp_path):
+    # acomm flash onto the stock firmware, then the buoy's own ready line at
+    # power-up: empty, then holding 8 packets of 1 KiB (seeded on its flash
+    # at its config's store path), which cost it heap
+    from acomm_cpython.picoflash import PICO_WALL0, boot_free, flash_image
+    from acomm_cpython.workloads.footprint_minute import seed_store
+
+    stock = _need("rp2040-stock")
+    img = str(tmp_path / "flash.img")
+    flash_image(stock, img, harness=False)
+    empty = boot_free(stock, img)
+    with open(seed_store(str(tmp_path / "store"), wall0=PICO_WALL0), "rb") as f:
+        loaded = boot_free(stock, img, f.read())
+    assert 100000 < loaded < empty < fp.pool_of(251652), (empty, loaded)

@@ -155,9 +155,10 @@ def main(path, store_path, rom=None, info=False):
     # checked, so only the checked copy stays on the heap
     folder, slash, fname = path.rpartition("/")
     sys.path.insert(0, folder or slash or ".")
-    from acomm_mp.start import load_config
+    from acomm_mp.boot import load_config
 
     cfg = load_config(fname[:-3] if fname.endswith(".py") else fname)
+    load_config = None
     sys.path.pop(0)
     # every module the board runs, loaded before the node exists: what is
     # allocated then is mostly bytecode, which a ROMFS partition or firmware
@@ -170,6 +171,7 @@ def main(path, store_path, rom=None, info=False):
     driver_class = None
     import acomm.transport.store  # noqa: F401
     import acomm_mp.runloop  # noqa: F401
+    import acomm_mp.start  # noqa: F401 - the board's entry point stays loaded while it runs
 
     gc.collect()
     code = gc.mem_alloc()
@@ -189,9 +191,11 @@ def main(path, store_path, rom=None, info=False):
                   listener=lambda ev: None, say=lambda s: None)
     cfg = build = None
     # as acomm_mp.start does once the node is built
-    from acomm_mp import release_builder
+    from acomm_mp import release, release_builder
 
     release_builder()
+    release("acomm_mp.boot")
+    release = release_builder = None
     gc.collect()
     base = gc.mem_alloc()
     if info:

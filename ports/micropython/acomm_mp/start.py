@@ -1,102 +1,50 @@
 # A board's entry point: boards/<name>/main.py calls start("config").
 #
-# Checks the configuration first (a wrong field stops here, named), then
-# opens the board's UARTs with machine.UART, the packet store on the flash
-# filesystem, and the watchdog when configured, builds the node
-# (acomm_mp.assemble) and runs it for ever in a plain loop
-# (acomm_mp.runloop.run_blocking). Everything that touches `machine` is
-# here, so the rest of the port runs in tests.
-#
-# Given the config module's name rather than its CONFIG, start() lets the
-# module go once the checked copy is made: the two copies would otherwise
-# both stay on the heap for ever (1.3 KiB for the buoy).
+# acomm_mp.boot checks the configuration, opens the UARTs and the store and
+# builds the node; that module is then released (needed once). start() arms
+# the watchdog when configured, prints the ready line with the heap left
+# free, and runs the node for ever in a plain loop
+# (acomm_mp.runloop.run_blocking), or beside the browser console.
 
 import gc
-import os
 import time
 
-from acomm.compat import ticks_ms
-from acomm.transport.store import Store
+from acomm.compat import const
 
-from . import release, release_builder
-from .uartstream import UartStream
+from . import release
 
-
-def open_uart(machine, lk):
-    kw = {"baudrate": lk["baud"], "timeout": 0}
-    if lk["tx"] is not None:
-        kw["tx"] = machine.Pin(lk["tx"])
-    if lk["rx"] is not None:
-        kw["rx"] = machine.Pin(lk["rx"])
-    try:
-        # a receive ring sized for the line (acomm_mp.boardconfig): a
-        # SeaTrac status burst arrives while the loop is busy elsewhere
-        u = machine.UART(lk["uart"], rxbuf=lk["rxbuf"], **kw)
-    except (TypeError, ValueError):
-        u = machine.UART(lk["uart"], **kw)
-    return UartStream(u)
+# The wall clock's epoch on a board: 2020-01-01. time.time() counts from
+# 1970 and is past 2**30 (from 2004), a big integer on a 32-bit board: each
+# packet's expiry took 32 B of heap more. From 2020 it stays a small integer
+# until 2054. Expiries are this node's own (a relay is told the lifespan
+# left), so only a store written with 1970's epoch sees its packets live on
+# until they are delivered.
+_EPOCH = const(1577836800)
 
 
-def _makedirs(path):
-    # the store's folder on the flash filesystem (os has no makedirs here)
-    parts = path.split("/")[:-1]
-    at = ""
-    for p in parts:
-        if not p:
-            continue
-        at += "/" + p
-        try:
-            os.mkdir(at)
-        except OSError as e:
-            try:
-                os.stat(at)  # already there
-            except OSError:
-                raise e  # not made: its own error (a full flash) says why
+def wall():
+    """Seconds since 2020-01-01 by the board's clock: the transport's lifespans."""
+    return int(time.time()) - _EPOCH
 
 
-def open_store(st, say=print):
-    try:
-        _makedirs(st["path"])
-        return Store(st["path"], capacity_bytes=st["capacity"], max_record=st["max_record"])
-    except OSError as e:
-        # A flash that cannot hold the store (full before the store was
-        # ever made, or failing) must not stop the board at boot: main.py
-        # would end at the REPL with no node and no watchdog, at every
-        # power-up. The node runs on a store that takes nothing: packets
-        # for this board are still delivered (they are never stored), but
-        # a packet to relay is refused ("receiver full"), so nothing is
-        # acknowledged that a reset would lose.
-        from acomm.transport.memorystore import MemoryStore
+def _boot(config, machine, make_report):
+    # in a frame of its own, which ends before the loop starts: the
+    # collector scans a running function's whole value stack, and a stale
+    # slot holding the boot module would keep it alive for ever
+    from . import boot
 
-        say("acomm: no store at %s (%s %s): relaying nothing" % (st["path"], type(e).__name__, e))
-        return MemoryStore(capacity_bytes=0, max_record=st["max_record"])
-
-
-def load_config(config):
-    """The checked config from a dict, or from the module of that name (then released)."""
-    from .boardconfig import check
-
-    if isinstance(config, str):
-        name = config
-        config = __import__(name).CONFIG
-        release(name)
-    cfg = check(config)
-    check = config = None
-    release("acomm_mp.boardconfig")  # needed once: 1.4 KiB back to the heap
-    return cfg
+    cfg = boot.load_config(config)
+    board = boot.build_board(cfg, machine, wall, make_report)
+    boot = None
+    release("acomm_mp.boot")
+    return cfg, board
 
 
 def start(config, make_report=None, machine=None):
     """Runs the board for ever. config: the name of the config module (normally "config") or its CONFIG dict."""
-    cfg = load_config(config)
     if machine is None:
         import machine
-    from .assemble import build
-
-    board = build(cfg, lambda lk: open_uart(machine, lk), ticks_ms, lambda: int(time.time()), open_store,
-                  make_report=make_report)
-    build = None
-    release_builder()  # needed once: the builder's code and the modem table go back to the heap
+    cfg, board = _boot(config, machine, make_report)
     if cfg["watchdog_ms"] and hasattr(machine, "WDT"):
         board.wdt = machine.WDT(timeout=cfg["watchdog_ms"])
     # the heap the board's own code is left with, counted after a collection

@@ -79,6 +79,7 @@ package(
         "__init__.py",
         "assemble.py",
         "boardconfig.py",
+        "boot.py",
         "runloop.py",
         "start.py",
         "uartstream.py",

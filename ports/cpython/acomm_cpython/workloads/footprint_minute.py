@@ -137,14 +137,15 @@ LOAD_PACKETS = 8
 LOAD_BYTES = 1024
 
 
-def seed_store(path, n=LOAD_PACKETS, size=LOAD_BYTES, seed=1):
+def seed_store(path, n=LOAD_PACKETS, size=LOAD_BYTES, seed=1, wall0=1000000):
     """Writes the buoy's store file as its transport leaves it after relaying n packets of `size` bytes for shore while Iridium is down.
 
     The buoy's own node (acomm_mp.assemble.build, its config, a Store on a
     file) runs here in the simulated ocean, and the diver sends the packets
     through it: the file holds exactly what the buoy's transport stored
     (random bodies: nothing compresses them). Then the board starts from
-    that file, as a buoy does after a reset with packets waiting.
+    that file, as a buoy does after a reset with packets waiting. wall0:
+    the wall clock (s) at the start, as the board that reads it counts.
     """
     from acomm.prng import Prng
     from acomm.transport.store import Store
@@ -153,7 +154,7 @@ def seed_store(path, n=LOAD_PACKETS, size=LOAD_BYTES, seed=1):
 
     cfg = boardfiles.load_config(boardfiles.board_path(BOARD))
     w = World(seed=seed)
-    wall = lambda: 1000000 + w.now() // 1000  # noqa: E731
+    wall = lambda: wall0 + w.now() // 1000  # noqa: E731
     ends = []
     stores = []
 

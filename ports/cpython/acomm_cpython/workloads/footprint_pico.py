@@ -5,7 +5,7 @@
 # over it, as run_qemu's does over the Cortex-M3's UART.
 #
 #   run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True) -> run_qemu's dict
-#   flash_image(stock_uf2, out)        the stock Pico's flash after `acomm flash`
+#   (flash_image, boot_free: acomm_cpython.picoflash)
 #   image_bytes(uf2)                   a firmware's size in flash
 #   pool_of(region) / region_of(pool)  the GC's table overhead
 #
@@ -43,13 +43,13 @@
 import os
 import re
 import shutil
-import subprocess
-import sys
 import tempfile
 import time
 
 from acomm_cpython import boardfiles
-from acomm_cpython.workloads.footprint_minute import BOARD, LOAD_PACKETS, SIM_MS, SerialPipe, judge, minute, result
+from acomm_cpython.picoflash import PICO_WALL0, boot_free, flash_image
+from acomm_cpython.workloads.footprint_minute import (BOARD, LOAD_PACKETS, SIM_MS, SerialPipe, judge, minute, result,
+                                                       seed_store)
 from acomm_cpython.workloads.footprint_runners import _read_until, put_files
 
 # A Pico minute takes 1-2.5 minutes of wall time on a quiet machine, and
@@ -59,7 +59,6 @@ from acomm_cpython.workloads.footprint_runners import _read_until, put_files
 # backstop, far enough that a slow run is never taken for a heap too small
 RUN_LIMIT_S = 3600
 BLOCK = 16  # MICROPY_BYTES_PER_GC_BLOCK on both 32-bit ports
-HARNESS = os.path.join(boardfiles.repo_root(), "tools", "lockstep", "acomm_lockstep.py")
 
 
 def pool_of(region):
@@ -261,45 +260,6 @@ def _board_figures(s, r, stand_in):
     return out
 
 
-def flash_image(stock_uf2, out, log=None):
-    """Writes `out`: the Pico's 2 MiB flash after `acomm flash --board buoy_pico` onto `stock_uf2`, plus the harness.
-
-    The real command runs against the emulated board's USB port (armv6m
-    .mpy files under /lib, main.py and config.py at /). The harness goes
-    beside them as /acomm_lockstep.mpy, outside /lib, and /main.py is
-    removed: the harness builds the node itself, and a main.py would start
-    a second one at boot. -> seconds the flash took.
-    """
-    from acomm_cpython.flash import mpremote_command
-    from acomm_cpython.picoboard import PicoBoard
-
-    tmp = tempfile.mkdtemp(prefix="acomm-footprint-flash-")
-    try:
-        harness = os.path.join(tmp, "acomm_lockstep.mpy")
-        boardfiles.compile_mpy(HARNESS, harness, "armv6m", "acomm_lockstep.py")
-        if os.path.exists(out):
-            os.remove(out)
-        with PicoBoard(stock_uf2, flash=out) as b:
-            t0 = time.monotonic()
-            r = subprocess.run([sys.executable, "-c", "import sys\nfrom acomm_cpython.cli import main\nsys.exit(main())",
-                                "flash", "--board", BOARD, "--port", b.usb],
-                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=900)
-            took = time.monotonic() - t0
-            if r.returncode:
-                raise RuntimeError("acomm flash to the emulated Pico failed: %s" % r.stdout[-800:])
-            if log:
-                log(r.stdout.strip().splitlines()[-1])
-            r = subprocess.run(mpremote_command() + ["connect", b.usb, "fs", "cp", harness, ":acomm_lockstep.mpy", "+",
-                                                     "fs", "rm", ":main.py"],
-                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
-            if r.returncode:
-                raise RuntimeError("copying the harness to the emulated Pico failed: %s" % r.stdout[-800:])
-            b.save()
-        return took
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-
-
 # --- the bench's RP2040 groups (footprint_workload --only NAME) ----------------
 
 ROOMY = 128 * 1024  # the roomy run's GC region, as the Cortex-M3's (footprint_workload.ROOMY)
@@ -373,10 +333,13 @@ def frozen_figures(emit, bisect, say=None, store=None):
 
 
 def mpy_figures(emit, tmp, store, say=None):
-    # the buoy as `acomm flash` installs it on the stock firmware, on the
-    # Pico's whole heap: empty, then holding the seeded store. The harness's
-    # .mpy is not the buoy's: what importing it took is measured apart and
-    # taken off (it is emitted too)
+    # the buoy as `acomm flash` installs it on the stock firmware. The free
+    # heap is read off the buoy's own ready line at boot, empty and with the
+    # seeded store (the harness's stand-ins for machine.UART and the clocks
+    # are not the board's, and its import order is not start()'s: a module
+    # loaded again by start()'s order once hid 6.4 KB from it). The harness
+    # runs give the heap after the imports and the build, on the whole heap;
+    # what importing the harness's .mpy took is measured apart and taken off
     stock = need("rp2040-stock")
     img = os.path.join(tmp, "pico-flash.img")
     took = flash_image(stock, img)
@@ -393,7 +356,11 @@ def mpy_figures(emit, tmp, store, say=None):
             emit("heap_after_imports_mpy_rp2040_bytes", r["code"] - r["harness"], "bytes")
             emit("heap_after_build_mpy_rp2040_bytes", r["after_build"] - r["harness"], "bytes")
             emit("heap_harness_mpy_rp2040_bytes", r["harness"], "bytes")
-            emit("heap_free_mpy_rp2040_bytes", r["free"], "bytes")
         else:
             emit("heap_after_build_mpy_rp2040_loaded_bytes", r["after_build"] - r["harness"], "bytes")
-            emit("heap_free_mpy_rp2040_loaded_bytes", r["free"], "bytes")
+    booted = os.path.join(tmp, "pico-flash-main.img")
+    flash_image(stock, booted, harness=False)
+    emit("heap_free_mpy_rp2040_bytes", boot_free(stock, booted), "bytes")
+    seeded = os.path.join(tmp, "store-pico")
+    with open(seed_store(seeded, wall0=PICO_WALL0), "rb") as f:
+        emit("heap_free_mpy_rp2040_loaded_bytes", boot_free(stock, booted, f.read()), "bytes")

@@ -32,8 +32,9 @@
 #       booted; heap_pool_rp2040 its whole GC pool; heap_*_mpy_rp2040* the
 #       buoy as `acomm flash` installs it on the stock firmware, on the
 #       whole heap, without the harness's .mpy (heap_harness_mpy_rp2040:
-#       what it took); heap_free_mpy_rp2040[_loaded] gc.mem_free() after a
-#       collect once the node is built (holding the seeded store)
+#       what it took); heap_free_mpy_rp2040[_loaded] what the buoy's own
+#       ready line reports free after a collection when the flashed Pico
+#       boots (holding the seeded store: acomm_cpython.picoflash.boot_free)
 #
 # The RP2040 groups are in the default run (the figures come from
 # `acomm bench footprint`) but take most of its time: a Pico minute is 1-2
