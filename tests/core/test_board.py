@@ -318,3 +318,15 @@ def test_a_network_key_in_the_config_secures_every_link_and_a_bad_one_is_refused
     assert "auth.tag_len" in _error(c)
     c["auth"] = {"key": key, "tagl": 4}
     assert "tagl" in _error(c)
+
+
+def test_the_boards_wall_clock_counts_from_2020_in_small_integers():
+    # expiries from time.time() (1970) are past 2**30, a big integer on a
+    # 32-bit board; from 2020 they stay small until 2054
+    import time
+
+    from acomm_mp.start import wall
+
+    w = wall()
+    assert 0 < w < (1 << 30) - 28 * 365 * 86400
+    assert abs(w + 1577836800 - int(time.time())) <= 1
