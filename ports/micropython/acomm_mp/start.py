@@ -16,15 +16,19 @@ from . import release
 # The wall clock's epoch on a board: 2020-01-01. time.time() counts from
 # 1970 and is past 2**30 (from 2004), a big integer on a 32-bit board: each
 # packet's expiry took 32 B of heap more. From 2020 it stays a small integer
-# until 2054. Expiries are this node's own (a relay is told the lifespan
-# left), so only a store written with 1970's epoch sees its packets live on
-# until they are delivered.
+# until 2054. A clock never set reads earlier (a Pico's starts at 2021, an
+# ESP32's at 2000, the qemu board's at 1970): those seconds are used as
+# they are, small and never negative, and the count jumps when the clock is
+# set, as time.time() itself does. Expiries are this node's own (a relay is
+# told the lifespan left), so only a store written with 1970's epoch sees
+# its packets live on until they are delivered.
 _EPOCH = const(1577836800)
 
 
 def wall():
-    """Seconds since 2020-01-01 by the board's clock: the transport's lifespans."""
-    return int(time.time()) - _EPOCH
+    """Seconds by the board's clock, counted from 2020-01-01 once it is set: the transport's lifespans."""
+    t = int(time.time())
+    return t - _EPOCH if t >= _EPOCH else t
 
 
 def _boot(config, machine, make_report):
