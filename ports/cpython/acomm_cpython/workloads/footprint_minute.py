@@ -12,6 +12,7 @@
 # (result) and whether the minute passed (judge). Starting a board is
 # footprint_runners' job.
 import json
+import os
 import time
 
 from acomm_cpython import boardfiles
@@ -153,6 +154,11 @@ def seed_store(path, n=LOAD_PACKETS, size=LOAD_BYTES, seed=1, wall0=1000000):
     from acomm_sim.boardsim import board_ends
 
     cfg = boardfiles.load_config(boardfiles.board_path(BOARD))
+    # a fresh store: one left at `path` holds the packets and the delivered
+    # pairs of a seeding before, and the diver's ids, the same again, are
+    # then duplicates the buoy no longer relays
+    if os.path.exists(path):
+        os.remove(path)
     w = World(seed=seed)
     wall = lambda: wall0 + w.now() // 1000  # noqa: E731
     ends = []
