@@ -56,6 +56,7 @@ from .route import MEDIUM_ALL, Router
 # module's dict on a board); tests/cpython/test_const_copies.py checks them
 _SEGMENT = const(5)  # acomm.frame
 _DONE_MEMORY = const(32)  # acomm.transport.packetstore
+_MAX_LIFESPAN_MS = const(0x10000000)  # acomm.link.txqueue: the longest a link queues a request
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
@@ -419,6 +420,11 @@ class Transport:
         life = p.expiry - self.wall()
         if life < 1:
             life = 1
+        elif life > _MAX_LIFESPAN_MS // 1000:
+            # a fragment waits in the link's queue 3 days at most; the packet
+            # keeps its own expiry here (a lifespan of weeks, or an expiry
+            # from another epoch, would have the link refuse every fragment)
+            life = _MAX_LIFESPAN_MS // 1000
         poll = sg.is_poll(head)
         # confirmed by the modem's own delivery report? (acomm.transport.delivery)
         rep = p.out.reports and p.out.report_wanted(len(data), poll)

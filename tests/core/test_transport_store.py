@@ -315,3 +315,13 @@ def test_the_delivered_pairs_are_kept_as_the_store_keeps_them():
     for k in range(40):
         ta._remember(9, k, False)
     assert len(ta._done) == 3 * 32 and not ta._is_done(1, 0x0102) and ta._is_done(9, 39) and not ta._is_done(9, 7)
+
+
+def test_a_lifespan_longer_than_a_link_keeps_a_request_is_still_sent():
+    # a link queues a request for 3 days at most; a packet with 10 days to
+    # live (or an expiry from another wall-clock epoch) sends its fragments
+    # with the link's longest, and keeps its own expiry
+    w, a, b, _, ta = net()
+    pid = ta.send(w.now(), "buoy", Prng(7).bytes(100), 10 * 86400, 5)
+    assert w.run(600000, until=lambda: DELIVERED in statuses(a, pid)), statuses(a, pid)
+    assert [e[3] for e in packets(b)] == [Prng(7).bytes(100)]

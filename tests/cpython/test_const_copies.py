@@ -26,7 +26,7 @@ SCOPED = {
                             "CAP_DELIVERY")),
     "acomm.drivers.atcommand": (("drivers/iridium.py", "drivers/atdriver.py"), ("R_OK", "R_END", "R_TIMEOUT")),
     "acomm.drivers.seatrac_sequences": (("drivers/seatrac.py",), ("CMD", "K_DAT", "K_PING")),
-    "acomm.link.txqueue": (("link/__init__.py", "link/ranging.py"), ("MAX_LIFESPAN_MS",)),
+    "acomm.link.txqueue": (("link/__init__.py", "link/ranging.py", "transport/__init__.py"), ("MAX_LIFESPAN_MS",)),
     "acomm.frame": (("transport/__init__.py",), ("SEGMENT",)),
     "acomm.transport.packetstore": (("transport/__init__.py",), ("DONE_MEMORY",)),
     "acomm.transport.delivery": (("transport/__init__.py",), ("REPORTS_ACK", "REPORT_COMPLETE", "REPORT_NEW_ROUND",
