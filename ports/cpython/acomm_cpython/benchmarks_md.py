@@ -289,7 +289,9 @@ def render(records, machine):
     a("## 5. Footprint on a microcontroller")
     a("")
     a("From `acomm bench footprint` (the buoy board's program on 32-bit builds: MicroPython's qemu "
-      "Cortex-M3 firmware and the unix port built for i386; the `*_unix64_estimate_*` figures come from "
+      "Cortex-M3 firmware, the unix port built for i386 and the Raspberry Pi Pico's own firmware in the "
+      "rp2040js emulator, where the `.mpy` buoy's free heap is what its ready line reports at boot; "
+      "the `*_unix64_estimate_*` figures come from "
       "the 64-bit unix port and understate a board; docs/micropython-port.md explains each figure), "
       "passed through as it comes. The peers have no "
       "MicroPython port to compare with: imcpy and cbor2's fast path are C extensions for CPython, "
