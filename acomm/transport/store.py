@@ -86,6 +86,11 @@ _osopen = getattr(os, "open", None)
 _replace = getattr(os, "replace", None) or os.rename
 
 
+def _no_room(e):
+    # whether OSError e says the filesystem is full
+    return bool(e.args) and e.args[0] == _ENOSPC
+
+
 def _exists(p):
     try:
         os.stat(p)
@@ -167,7 +172,7 @@ class Store:
             # the capacity fits but the filesystem does not (other files,
             # a small flash): a refusal, as above, never a crash. Nothing
             # moved: the next record overwrites what was written
-            if e.args and e.args[0] == _ENOSPC:
+            if _no_room(e):
                 raise StoreFull("filesystem full")
             raise
         j = self._find(key)
@@ -195,7 +200,7 @@ class Store:
             try:
                 self._append_record(hdr, b"", crc32(hdr))
             except OSError as e:
-                if not e.args or e.args[0] != _ENOSPC:
+                if not _no_room(e):
                     raise
                 # no room for the tombstone on the filesystem: forgotten
                 # now, gone from the file at the next compaction that fits
@@ -364,7 +369,7 @@ class Store:
         try:
             self.compact()
         except OSError as e:
-            if e.args and e.args[0] == _ENOSPC:
+            if _no_room(e):
                 return False
             raise
         return True

@@ -6,6 +6,8 @@
 #       onto the stock firmware; the 2 MiB flash image written to `out`
 #   boot_free(stock_uf2, image, store=None)    the free heap the buoy's
 #       ready line reports when that image boots (holding `store`)
+#   heap_free(lines)                           the free heap of each ready
+#       line among a board's console lines
 import os
 import re
 import shutil
@@ -64,7 +66,14 @@ def flash_image(stock_uf2, out, log=None, harness=True):
 # board's wall clock (acomm_mp.start.wall, from 2020) counts as this: the
 # store seeded for a boot holds packets that have not expired yet
 PICO_WALL0 = 31622400
-_READY = re.compile(rb"acomm buoy: node 1, links [^;\r\n]*; (\d+) B heap free")
+# a board's ready line (acomm_mp.start): "acomm buoy: node 1, links
+# acoustic, satellite; 132544 B heap free"
+_READY_FREE = re.compile(r": node \d+, links [^;\r\n]*; (\d+) B heap free")
+
+
+def heap_free(lines):
+    """The free heap (bytes) each ready line among a board's console `lines` reports, in order."""
+    return [int(m.group(1)) for m in (_READY_FREE.search(x) for x in lines) if m]
 
 
 def boot_free(stock_uf2, image, store=None, limit_s=120):
@@ -92,25 +101,25 @@ def boot_free(stock_uf2, image, store=None, limit_s=120):
                 t.fs_writefile(path, store)
                 t.close()
                 b.save()
-            ser = serial_for(b)
-            text = b""
-            m = None
+            ser = _serial_for(b)
+            text = ""
+            free = []
             try:
                 b.reset()
                 end = time.monotonic() + limit_s
-                while m is None and time.monotonic() < end:
-                    text += ser.read(max(1, ser.in_waiting))
-                    m = _READY.search(text)
+                while not free and time.monotonic() < end:
+                    text += ser.read(max(1, ser.in_waiting)).decode(errors="replace")
+                    free = heap_free([text])
             finally:
                 ser.close()
-        if m is None:
+        if not free:
             raise RuntimeError("the buoy gave no ready line within %d s: %r" % (limit_s, text[-600:]))
-        return int(m.group(1))
+        return free[0]
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def serial_for(board):
+def _serial_for(board):
     """The emulated Pico's USB REPL as a pyserial port."""
     import serial
 

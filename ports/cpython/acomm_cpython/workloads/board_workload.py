@@ -31,7 +31,6 @@
 # firmware this fails with one line saying what is missing.
 import json
 import os
-import re
 import sys
 
 PER_RUNTIME = ()
@@ -59,13 +58,10 @@ def run(emit):
     emit("rp2040_flash_seconds", round(r["flash_seconds"], 2), "s")
     emit("rp2040_boot_to_ready_ms", round(r["boot_to_ready_ms"], 1), "ms")
     emit("rp2040_first_boot_to_ready_ms", round(r["first_boot_ms"], 1), "ms")
+    from acomm_cpython.picoflash import heap_free
+
     free = heap_free(r["buoy_console"])
     if len(free) < 2:
         raise RuntimeError("the buoy's ready lines give no free heap: %r" % r["buoy_console"][-6:])
     emit("rp2040_buoy_heap_free_bytes", free[0], "bytes")
     emit("rp2040_buoy_heap_free_after_reset_bytes", free[1], "bytes")
-
-
-def heap_free(lines):
-    """The free heap (bytes) each ready line of a board's console reports ("...; N B heap free"), in order."""
-    return [int(m.group(1)) for m in (re.search(r": node \d+, links .*; (\d+) B heap free", x) for x in lines) if m]

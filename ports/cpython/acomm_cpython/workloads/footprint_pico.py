@@ -169,9 +169,8 @@ def run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True, seed=1
     (flash_image) with the buoy's .mpy files under /lib and the harness as
     /acomm_lockstep.mpy, for the stock firmware; each run starts from a copy
     of it. peak=False: no peak sampled (see the header). -> run_qemu's dict,
-    plus "pool" (the heap's pool in bytes, see the header), "harness" (what
-    importing the harness took) and "free" (gc.mem_free() once the node is
-    built, without the harness or the stand-in).
+    plus "pool" (the heap's pool in bytes, see the header) and "harness"
+    (what importing the harness took).
     """
     from acomm_cpython.picoboard import PicoBoard
 
@@ -254,7 +253,6 @@ def _board_figures(s, r, stand_in):
         if r:
             for k in ("peak", "after_build", "code"):
                 out[k] = r[k] - stand_in
-            out["free"] = out["pool"] - out["after_build"] + out["harness"]
     if r and stand_in:
         out["peak"] = None  # not sampled
     return out
