@@ -52,6 +52,14 @@ class SerialStream:
     def any(self):
         return self.ser.in_waiting
 
+    def filenos(self):
+        """The descriptors an event loop waits on for bytes to read; None when the port has none
+        (a pyserial URL such as rfc2217://): the loop then polls it."""
+        try:
+            return (self.ser.fileno(),)
+        except (AttributeError, OSError, ValueError):
+            return None
+
     def write(self, data):
         return self.ser.write(data)
 
@@ -271,6 +279,11 @@ class TcpStream:
     @property
     def connected(self):
         return self.sock is not None and not self._connecting
+
+    def filenos(self):
+        """The socket an event loop waits on for bytes to read (none while connecting or down:
+        the connection is made by read() and write() calls on the loop's timer)."""
+        return (self.sock.fileno(),) if self.connected else ()
 
     def _try_connect(self):
         if self._closed or time.monotonic() < self._next_try:

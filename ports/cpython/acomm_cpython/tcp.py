@@ -80,6 +80,14 @@ class TcpServerPort:
     def address(self):
         return self.listener.getsockname()
 
+    def filenos(self):
+        """The listener and every connection: what an event loop waits on for reading."""
+        return (self.listener.fileno(),) + tuple(c.sock.fileno() for c in self.conns.values())
+
+    def pending(self):
+        """Bytes framed for the connections but not yet taken by their sockets."""
+        return sum(len(c.out) for c in self.conns.values())
+
     def pump(self, now):
         d = self.driver
         self._accept(now)
@@ -183,6 +191,14 @@ class TcpClientPort:
     @property
     def connected(self):
         return self._up
+
+    def filenos(self):
+        """The connection's socket while it is up (see TcpStream.filenos)."""
+        return self.stream.filenos()
+
+    def pending(self):
+        """Bytes written but not yet taken by the socket."""
+        return self.stream.pending()
 
     def pump(self, now):
         d = self.driver

@@ -95,6 +95,10 @@ class UdpPort:
             raise
         return d
 
+    def filenos(self):
+        """The sockets an event loop waits on for datagrams (unicast, then discovery)."""
+        return tuple(s.fileno() for s in self._socks)
+
     @property
     def address(self):
         # (host, port) the unicast socket is bound to
