@@ -138,37 +138,45 @@ def _frame_to_auv(n, data):
     return n["topside"].node.links["acoustic"].framing.encode(fr.DATA, 1, 7, data)
 
 
+def _on_air(w, eve, data):
+    # a transceiver near the auv puts data on the water as the topside's (2) frame to the auv (1)
+    eve.send(w.now(), 2, 1, data)
+    w.run(5000)
+
+
 def test_tampered_and_replayed_frames_never_reach_the_application():
+    from acomm_sim.attacker import Attacker
+
     w, n = _net()
-    link = n["auv"].node.links["acoustic"]
+    eve = Attacker(w.channel, 9, (20, 0, 5))
     auth = n["auv"].node.auth
     stop = seaware.encode(2, "stop_mission")
     _, genuine = _frame_to_auv(n, stop)
-    link._on_rx(w.now(), 2, 1, genuine)  # as the modem hands it over
+    _on_air(w, eve, genuine)
     assert [e[4] for e in _got(n["auv"], EV_RECEIVED)] == [stop]
     # a recording played back later, past the link's duplicate filter
     w.run(120000)
-    link._on_rx(w.now(), 2, 1, genuine)
+    _on_air(w, eve, genuine)
     assert auth.stats["replayed"] == 1
     # and with a fresh sequence number, which the tag covers
     replay = bytearray(genuine)
     replay[0] = (replay[0] & 0xF0) | 9
-    link._on_rx(w.now(), 2, 1, bytes(replay))
+    _on_air(w, eve, bytes(replay))
     assert auth.stats["bad_tag"] == 1
     # tampered: one bit of the command changed
     _, other = _frame_to_auv(n, seaware.encode(2, "rendezvous_on"))
     bad = bytearray(other)
     bad[3] ^= 1
-    link._on_rx(w.now(), 2, 1, bytes(bad))
+    _on_air(w, eve, bytes(bad))
     assert auth.stats["bad_tag"] == 2
     # an unauthenticated copy of the same command: no tag at all
     plain = fr.encode_elided(fr.Frame(fr.DATA, 2, 1, 5, seaware.encode(2, "rendezvous_on")))
-    link._on_rx(w.now(), 2, 1, plain)
+    _on_air(w, eve, plain)
     assert len(_got(n["auv"], EV_REFUSED)) == 1
     assert [e[4] for e in _got(n["auv"], EV_RECEIVED)] == [stop]
     # and the genuine one still goes through after all that
     _, ok = _frame_to_auv(n, seaware.encode(2, "rendezvous_on"))
-    link._on_rx(w.now(), 2, 1, ok)
+    _on_air(w, eve, ok)
     assert len(_got(n["auv"], EV_RECEIVED)) == 2
 
 
@@ -187,10 +195,11 @@ def test_a_command_in_a_transport_packet_needs_every_fragment_authenticated():
     wall = lambda: w.now() // 1000  # noqa: E731
     for name in n:
         Transport.of(n[name].node, wall=wall)
-    # an attacker sends its fragments without waiting for the lane probe
-    # of a node's first transfer (acomm.transport.arq.Outgoing.probe), which it could
-    # not hear the answer to anyway
-    n["stranger"].node.transport._gens[("acoustic", 1, 0)] = 1
+    # the stranger's transfer starts with its fragments, as an attacker's
+    # would: a fresh transport (nothing resumed from its store) sends no
+    # lane probe first (acomm.transport.arq.Outgoing.probe), whose answer
+    # the stranger could not hear anyway
+    assert n["stranger"].node.transport.pending() == []
     start = seaware.encode(2, "start_mission")
     n["topside"].node.transport.send(w.now(), "auv", start, 600, 5)
     w.run(60000)

@@ -19,6 +19,7 @@ from acomm.link.framing import LinkFraming
 from acomm.link.names import AddressMap, NameTable
 from acomm.prng import Prng
 from acomm.transport import Transport
+from acomm_sim.attacker import Attacker
 from acomm_sim.world import World
 from linkcheck import Recorder
 from scripted_driver import ScriptedDriver
@@ -140,11 +141,12 @@ def test_replays_and_tag_guesses_at_the_link():
     replay[0] = (replay[0] & 0xF0) | 11  # another sequence number: the tag covers it
     drv.receive(2, 1, bytes(replay))
     # to another node: the same bytes towards node 3 do not verify there
-    other = Link("acoustic", ScriptedDriver(CAP_ADDRESSING | CAP_BROADCAST), 3, link.names, None,
-                 advert_period_ms=600000)
+    odrv = ScriptedDriver(CAP_ADDRESSING | CAP_BROADCAST)
+    other = Link("acoustic", odrv, 3, link.names, None, advert_period_ms=600000)
     other.framing.set_auth(Auth(KEY))
     other.guard = commands()
-    other._on_rx(clk(), 2, 3, sealed)
+    odrv.receive(2, 3, sealed)
+    other.poll(clk())
     # tag guessing: 2000 random counters and tags on a frame to us
     rng = Prng(5)
     for _ in range(2000):
@@ -191,9 +193,13 @@ def test_forged_sacks_never_complete_fail_or_advance_a_transfer():
         link = top.node.links["acoustic"]
         pid, p = _outgoing(w, top)
         o = p.out
-        # completion, on the link as the modem would hand it over
+        # completion, put on the water as from the auv by a transceiver near
+        # the topside once its fragment has left (a half-duplex modem hears
+        # nothing while it sends)
+        w.run(60000, until=lambda: link.stats["tx_frames"] and link.idle(w.now()))
         head, body = sg.sack_complete(o.lane, o.gen, o.count, pid)
-        link._on_rx(w.now(), 1, 2, _plain(fr.SEGMENT, head, body))
+        Attacker(w.channel, 9, (120, 0, 5)).send(w.now(), 1, 2, _plain(fr.SEGMENT, head, body))
+        w.run(3000)
         if not strict:
             assert _statuses(top, pid)[-1] == DELIVERED  # reported delivered; it never arrived
             continue
@@ -234,19 +240,24 @@ def test_floods_of_unsealed_fragments_keep_to_their_share():
         for lane in (0, 1):
             h, first = sg.frag_header(False, lane, 0, 0)
             t.on_segment(w.now(), link, src, 1, h, first + sg.packet_header(src, 60) + bytes(20), False)
-    assert len(t._rx) == UNSEALED_RX and all(r.unauthed for r in t._rx.values())
+    # UNSEALED_RX of them taken (held, unanswered), the rest refused
     assert auv.node.guard.refused == {"flood": 80 - UNSEALED_RX}
     # no SACK went out for any of them
-    assert not t._sacks and not len(link.queue)
+    assert not len(link.queue)
     # a sealed transfer from the topside still finds room and is answered
     h, b = _frag0(9, b"hello")
     t.on_segment(w.now(), link, 2, 1, h, b, True)
     assert [e[3:5] for e in auv.events if e[0] == EV_PACKET] == [(b"hello", True)]
-    assert len(t._sacks) == 1
+    assert [r.data for r in link.queue] == [sg.sack_complete(0, 0, 1, 9)[1]]
     # an unsealed fragment can neither join nor restart the sealed lane
+    events = len(auv.events)
     h, first = sg.frag_header(False, 0, 1, 0)
     t.on_segment(w.now(), link, 2, 1, h, first + sg.packet_header(10, 3) + b"bad", False)
-    assert auv.node.guard.refused["fragment"] == 1 and t._rx[("acoustic", 2, 0)].done_pid == 9
+    assert auv.node.guard.refused["fragment"] == 1 and len(auv.events) == events
+    # the lane still holds the sealed packet's completion: a sealed poll gets it again
+    h, first = sg.frag_header(True, 0, 0, 0)
+    t.on_segment(w.now(), link, 2, 1, h, first, True)
+    assert [r.data for r in link.queue][-1] == sg.sack_complete(0, 0, 1, 9)[1]
 
 
 def test_an_unsealed_packet_is_delivered_marked_and_never_answered():
@@ -255,7 +266,7 @@ def test_an_unsealed_packet_is_delivered_marked_and_never_answered():
     h, b = _frag0(4, b"chat")
     t.on_segment(w.now(), auv.node.links["acoustic"], 7, 1, h, b, False)
     assert [e[3:5] for e in auv.events if e[0] == EV_PACKET] == [(b"chat", False)]
-    assert not t._sacks
+    assert not len(auv.node.links["acoustic"].queue)  # no SACK
 
 
 def test_oversized_lengths_and_a_decompression_bomb_cost_nothing():
@@ -286,5 +297,6 @@ def test_a_sealed_sack_cannot_be_turned_into_a_refusal():
     head, body = sg.sack(0, 1, 0, b"\x02")
     data = bytearray(_peer().encode(fr.SEGMENT, 1, head, body)[1])
     data[0] |= 4  # C: complete / refused
-    link._on_rx(clk(), 2, 1, bytes(data))
+    drv.receive(2, 1, bytes(data))
+    link.poll(clk())
     assert link.framing.auth.stats["bad_tag"] == 1 and link.stats["rx_bad"] == 1
