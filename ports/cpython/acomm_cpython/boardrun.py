@@ -116,7 +116,7 @@ def main(args):
 
     from .console import Console
     from .eventlines import Output
-    from .modems import ModemError, StartWatch, open_stream
+    from .modems import ModemError, StartWatch, open_store, open_stream
 
     bdir = board_dir(args.board, args.boards)
     name = os.path.basename(os.path.normpath(bdir))
@@ -150,7 +150,7 @@ def main(args):
         cfg["storage"] = dict(st, path=os.path.join(args.store, "acomm.store"))
 
         def store_open(s):
-            return nodeloop.open_store(args.store, s["capacity"], s["max_record"])
+            return open_store(args.store, s["capacity"], s["max_record"])
     board = None
     try:
         board = build(cfg, open_uart, ticks_ms, lambda: int(time.time()), store_open,

@@ -19,8 +19,7 @@ from acomm.node import Node
 
 from .imcbridge import ANNOUNCE_GROUP, DATA_PORT, ImcBridge
 from acomm.apps.imcgateway import ImcGateway
-from .ipnode import hostport, keyval
-from .modems import ModemError
+from .modems import ModemError, add_known, hostport, interrupt, keyval
 
 _SIM_STEP_MAX_MS = 1000  # simulated ms per loop round at most, so the sockets are read meanwhile
 
@@ -111,16 +110,10 @@ def build_real(args):
     if args.name is None or args.id is None or not args.modem:
         raise ValueError("without --sim, give --name, --id and at least one --modem")
     node = Node(args.name, args.id)
-    for kv in args.known:
-        k, v = keyval(kv)
-        node.names.add(k, int(v))
+    add_known(node, args.known)
     for spec in args.modem:
         _modem_link(node, spec)
     return [node], node.step, None
-
-
-def _stop(signum, frame):
-    raise KeyboardInterrupt
 
 
 def main(args):
@@ -145,7 +138,7 @@ def main(args):
                for gw, p in zip(gws, bridge.ports)]
     print(json.dumps({"systems": systems, "discovery_port": bridge.discovery_port, "multicast": bridge.multicast}),
           flush=True)
-    signal.signal(signal.SIGTERM, _stop)  # a supervisor's stop still prints the counters
+    signal.signal(signal.SIGTERM, interrupt)  # a supervisor's stop still prints the counters
     try:
         bridge.run(args.seconds)
     except KeyboardInterrupt:

@@ -23,6 +23,7 @@ import socket
 import sys
 import time
 
+from .modems import parse_options
 from .streams import set_raw
 
 # name -> (module, class, default TCP port or None)
@@ -45,32 +46,6 @@ def emulator_class(modem):
     mod, cls, _ = MODEMS[modem]
     m = __import__(mod, None, None, [cls])
     return getattr(m, cls)
-
-
-def parse_value(text):
-    # --option values: int, float, true/false, or a string
-    low = text.lower()
-    if low in ("true", "yes", "on"):
-        return True
-    if low in ("false", "no", "off"):
-        return False
-    for conv in (int, float):
-        try:
-            return conv(text)
-        except ValueError:
-            pass
-    return text
-
-
-def parse_options(pairs):
-    """--option KEY=VALUE lines -> {key: parse_value(value)}; ValueError names a line without '='."""
-    options = {}
-    for kv in pairs:
-        if "=" not in kv:
-            raise ValueError("--option wants KEY=VALUE, got %r" % kv)
-        k, v = kv.split("=", 1)
-        options[k.strip()] = parse_value(v.strip())
-    return options
 
 
 def parse_peer(text):

@@ -12,7 +12,6 @@
 # for a usage error (a wrong --modem KIND, a bad key file); 1 when a modem
 # cannot be opened or does not answer its start-up.
 
-import os
 import sys
 
 from acomm.apps.policy import commands
@@ -23,21 +22,8 @@ from acomm.link import BROADCAST
 from acomm.node import Node
 
 from . import nodeloop
-from .modems import DRIVERS, ModemError, ModemSpecError
+from .modems import DRIVERS, ModemError, ModemSpecError, add_known, hostport, keyval, load_key, open_store, parse_value
 from .udp import DEFAULT_GROUP, DEFAULT_PORT
-
-
-def hostport(text, default_host="0.0.0.0"):
-    # "HOST:PORT", ":PORT" or "PORT" -> (host, port)
-    host, _, port = text.rpartition(":")
-    return (host or default_host, int(port))
-
-
-def keyval(text):
-    k, sep, v = text.partition("=")
-    if not sep:
-        raise ValueError("expected KEY=VALUE, got %r" % text)
-    return k, v
 
 
 def add_arguments(p):
@@ -71,35 +57,6 @@ def add_arguments(p):
     p.add_argument("--auth-open", action="store_true",
                    help="open mode: with the key, take control frames (acks, SACKs, adverts) without a tag, as "
                         "before strict mode; anyone on the channel can then forge them (docs/wire-format.md)")
-
-
-def load_key(path):
-    # -> the key bytes; AcommError naming the file and what is wrong with it
-    # (the key itself never appears in a message). As ssh does with a
-    # private key, a file that anyone but its owner may read or write is
-    # refused: the key may already be out.
-    try:
-        mode = os.stat(path).st_mode
-    except OSError as e:
-        raise AcommError("key file %s: %s" % (path, e.strerror or e))
-    if mode & 0o077:
-        raise AcommError("key file %s: permissions %04o are too open: others than its owner can use it, so the key "
-                         "may be known already; make it the owner's only (chmod 600 %s), or take a new key"
-                         % (path, mode & 0o7777, path))
-    try:
-        with open(path) as f:
-            text = f.read().strip()
-    except OSError as e:
-        raise AcommError("key file %s: %s" % (path, e.strerror or e))
-    try:
-        key = bytes.fromhex(text)
-    except ValueError:
-        raise AcommError("key file %s: not hex digits" % path) from None
-    if not 16 <= len(key) <= 64:
-        raise AcommError("key file %s: %d bytes, the key must be 16 to 64" % (path, len(key)))
-    return key
-
-
 
 
 def _ip_links(args, node, out):
@@ -148,8 +105,6 @@ def _modem_links(args, node):
     opts = {}
     if args.advert_period is not None:
         opts["advert_period_ms"] = int(args.advert_period * 1000)
-    from .emulate import parse_value
-
     dopts = dict((k, parse_value(v)) for k, v in (keyval(kv) for kv in args.driver_option))
     streams, watches, wheres = [], [], {}
     for spec in args.modem:
@@ -190,9 +145,7 @@ def main(args):
             parse_spec(spec)
         key = load_key(args.key_file) if args.key_file is not None else None
         node = Node(args.name, args.id)
-        for kv in args.known:
-            k, v = keyval(kv)
-            node.names.add(k, int(v))
+        add_known(node, args.known)
         log = nodeloop.open_log(args.log)
     except (AcommError, ValueError) as e:
         print("acomm node: %s" % e, file=sys.stderr)
@@ -208,7 +161,7 @@ def main(args):
         closers += _ip_links(args, node, out)
         streams, watches, wheres = _modem_links(args, node)
         closers += streams
-        store = nodeloop.open_store(args.store) if args.store else None
+        store = open_store(args.store) if args.store else None
         if store is not None:
             closers.append(store)
         transport = Transport.of(node, store=store)

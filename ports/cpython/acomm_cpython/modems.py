@@ -14,6 +14,11 @@
 # Errors come in two kinds, so that a command line can tell a typing
 # mistake (ModemSpecError, a usage error) from a device that is missing,
 # busy or silent (ModemError, at run time).
+#
+# Below add_modem_link, what the command lines (acomm_cpython.cli) and the
+# libraries' users share: option texts (parse_value, parse_options, hostport,
+# keyval, add_known), the network key file (load_key), the persistent store
+# (open_store) and the SIGTERM handler (interrupt).
 
 from acomm.errors import AcommError
 from acomm.drivers.registry import MODEMS
@@ -147,3 +152,98 @@ def add_modem_link(node, spec, name=None, options=None, **link_options):
     watch = StartWatch(driver)
     node.add_link(name, driver, stream, medium=medium, **link_options)
     return name, stream, watch
+
+
+# --- what the command lines share: option texts, the key, the store -----------
+
+
+def parse_value(text):
+    """An option's value: int, float, true/false (yes/no, on/off), or the text itself."""
+    low = text.lower()
+    if low in ("true", "yes", "on"):
+        return True
+    if low in ("false", "no", "off"):
+        return False
+    for conv in (int, float):
+        try:
+            return conv(text)
+        except ValueError:
+            pass
+    return text
+
+
+def parse_options(pairs):
+    """--option KEY=VALUE lines -> {key: parse_value(value)}; ValueError names a line without '='."""
+    options = {}
+    for kv in pairs:
+        if "=" not in kv:
+            raise ValueError("--option wants KEY=VALUE, got %r" % kv)
+        k, v = kv.split("=", 1)
+        options[k.strip()] = parse_value(v.strip())
+    return options
+
+
+def hostport(text, default_host="0.0.0.0"):
+    """"HOST:PORT", ":PORT" or "PORT" -> (host, port)."""
+    host, _, port = text.rpartition(":")
+    return (host or default_host, int(port))
+
+
+def keyval(text):
+    """"KEY=VALUE" -> (key, value); ValueError without '='."""
+    k, sep, v = text.partition("=")
+    if not sep:
+        raise ValueError("expected KEY=VALUE, got %r" % text)
+    return k, v
+
+
+def add_known(node, pairs):
+    """--known NAME=ID lines: the node's names for other nodes; ValueError on a bad line."""
+    for kv in pairs:
+        k, v = keyval(kv)
+        node.names.add(k, int(v))
+
+
+def load_key(path):
+    """The network key in a file -> its bytes; AcommError naming the file and what is wrong.
+
+    The key itself never appears in a message. As ssh does with a private
+    key, a file that anyone but its owner may read or write is refused: the
+    key may already be out."""
+    import os
+
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as e:
+        raise AcommError("key file %s: %s" % (path, e.strerror or e))
+    if mode & 0o077:
+        raise AcommError("key file %s: permissions %04o are too open: others than its owner can use it, so the key "
+                         "may be known already; make it the owner's only (chmod 600 %s), or take a new key"
+                         % (path, mode & 0o7777, path))
+    try:
+        with open(path) as f:
+            text = f.read().strip()
+    except OSError as e:
+        raise AcommError("key file %s: %s" % (path, e.strerror or e))
+    try:
+        key = bytes.fromhex(text)
+    except ValueError:
+        raise AcommError("key file %s: not hex digits" % path) from None
+    if not 16 <= len(key) <= 64:
+        raise AcommError("key file %s: %d bytes, the key must be 16 to 64" % (path, len(key)))
+    return key
+
+
+def open_store(path_dir, capacity=1 << 22, max_record=1024):
+    """The transport's persistent store in folder path_dir (made when missing)."""
+    import os
+
+    from acomm.transport.store import Store
+
+    os.makedirs(path_dir, exist_ok=True)
+    return Store(os.path.join(path_dir, "acomm.store"), capacity_bytes=capacity, max_record=max_record)
+
+
+def interrupt(signum, frame):
+    """A signal handler (SIGTERM) that ends a command as Ctrl-C does, through its finally blocks."""
+    raise KeyboardInterrupt

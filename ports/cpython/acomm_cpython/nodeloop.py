@@ -13,7 +13,7 @@ import select
 import signal
 import time
 
-from .modems import ModemError
+from .modems import ModemError, interrupt
 
 _MAX_LINE = 4096
 _STEP_S = 0.005
@@ -46,10 +46,6 @@ class LineReader:
         return [ln.decode("utf-8", "replace") for ln in done]
 
 
-def _stop(signum, frame):
-    raise KeyboardInterrupt
-
-
 def wait_started(tick, watches, out, timeout_s):
     """Steps until every modem said it is up; ModemError names the first that did not in time.
 
@@ -79,7 +75,7 @@ def serve(tick, console, stdin_fd, seconds=None, poll=None, stop_at_eof=True):
     (without `seconds`) it first waits for what the console asked for to
     end (console.open: each ends by its lifespan at the latest), so a
     script piping commands in gets their outcome."""
-    old = signal.signal(signal.SIGTERM, _stop)
+    old = signal.signal(signal.SIGTERM, interrupt)
     reader = LineReader(stdin_fd) if stdin_fd is not None else None
     end = None if seconds is None else time.monotonic() + seconds
     draining = False
@@ -199,14 +195,6 @@ def with_web(args, node, out, console, tick, closers, password=None):
     console.command = wrap(console.command)
     console.poll = wrap(console.poll)
     return wrap(tick)
-
-
-def open_store(path_dir, capacity=1 << 22, max_record=1024):
-    """The transport's persistent store in folder path_dir (made when missing)."""
-    from acomm.transport.store import Store
-
-    os.makedirs(path_dir, exist_ok=True)
-    return Store(os.path.join(path_dir, "acomm.store"), capacity_bytes=capacity, max_record=max_record)
 
 
 def open_log(path):

@@ -105,7 +105,7 @@ def add_arguments(p):
 
 
 def main(args):
-    from .emulate import parse_options
+    from .modems import parse_options
 
     try:
         with open(args.file, encoding="utf-8", errors="replace") as f:
