@@ -24,7 +24,7 @@ _TABLE = (
     (183, "ExtendedRSSI", "value:fp32 units:uint8"),
     (185, "CompressedHistory", "base_lat:fp32 base_lon:fp32 base_time:fp32 data:rawdata"),
     (189, "CommSystemsQuery", "type:uint8 comm_interface:uint16 model:uint16 list:plaintext"),
-    (190, "TelemetryMsg", "type:uint8 req_id:uint32 ttl:uint16 code:uint8 destination:plaintext Source:plaintext acknowledge:uint8 status:uint8 data:rawdata"),
+    (190, "TelemetryMsg", "type:uint8 req_id:uint32 ttl:uint16 code:uint8 destination:plaintext source:plaintext acknowledge:uint8 status:uint8 data:rawdata"),
     (206, "AcousticMessage", "message:message"),
     (207, "SimAcousticMessage", "lat:fp64 lon:fp64 depth:fp32 sentence:plaintext txtime:fp64 modem_type:plaintext sys_src:plaintext seq:uint16 sys_dst:plaintext flags:uint8 data:rawdata"),
     (211, "AcousticOperation", "op:uint8 system:plaintext range:fp32 msg:message"),

@@ -105,6 +105,21 @@ def test_round_trip_every_message_in_the_table():
             _round_trip(m, src=rng.below(0x10000), dst=rng.below(0x10000), timestamp=imc.F64.seconds(rng.next32(), rng.below(1000000)))
 
 
+def test_field_names_are_the_abbrevs_dune_and_imcpy_use():
+    # TelemetryMsg's text field is "source" (its abbrev; the XML name is
+    # "Source"), as in DUNE's JSON and imcpy; every field name is an abbrev
+    # in lower case
+    names = [f for f, _ in imc.by_name("TelemetryMsg")[2]]
+    assert names == ["type", "req_id", "ttl", "code", "destination", "source", "acknowledge", "status", "data"]
+    for mgid in messages.known_ids():
+        for fname, _ in messages.by_id(mgid)[2]:
+            assert fname == fname.lower(), (mgid, fname)
+    m = {"abbrev": "TelemetryMsg", "type": 2, "req_id": 7, "ttl": 60, "code": 3, "destination": "ccu",
+         "source": "buoy-1", "acknowledge": 1, "status": 1, "data": b"\x01\x02"}
+    p = imc.decode(imc.encode(m))
+    assert p.msg == m and p.msg["source"] == "buoy-1" and "Source" not in p.msg
+
+
 def test_exact_round_trip_of_fp64_fields():
     rng = Prng(4)
     for _ in range(200):
