@@ -22,6 +22,25 @@ def _restart(sn, w, store, **kw):
     return Transport.of(sn.node, store=store, wall=wall_of(w), **kw)
 
 
+def _key(pid, chunk=0):
+    # the store key of a chunk of the diver's packet pid (_Pkt's origin, 2, is the diver's id)
+    return (chunk << 24) | key_of(_Pkt(pid, b""))
+
+
+def _saved(store):
+    # what a power cut would leave of a store, as its public get/keys read it
+    return dict((k, store.get(k)) for k in store.keys())
+
+
+def _cut_back(store, saved):
+    # the store as it was when saved: later puts and deletes never happened
+    for k in store.keys():
+        if k not in saved:
+            store.delete(k)
+    for k, v in saved.items():
+        store.put(k, v)
+
+
 def test_a_restart_on_a_file_store_resumes_the_transfer():
     with TempDir() as d:
         st = Store(d.file("diver"), capacity_bytes=32768, max_record=256)
@@ -69,7 +88,7 @@ def test_a_packet_whose_body_the_store_lost_fails_with_a_reason():
     store = MemoryStore(max_record=256)
     w, a, b, _, ta = net(stores={"diver": store})
     pid = ta.send(w.now(), "buoy", Prng(5).bytes(300), 3600, 5)  # random: two records
-    store.delete((1 << 24) | key_of(ta._out[0]))  # its second record rots away before it is sent
+    store.delete(_key(pid, 1))  # its second record rots away before it is sent
     assert w.run(600000, until=lambda: FAILED in statuses(a, pid))
     assert not packets(b) and ta.pending() == []
 
@@ -107,8 +126,7 @@ def test_a_record_lost_mid_transfer_fails_the_packet_once():
     w, a, b, _, ta = net(loss=1.0, stores={"diver": store})  # nothing arrives: the transfer goes on
     pid = ta.send(w.now(), "buoy", Prng(6).bytes(400), 3600, 5)  # random: 7 records
     w.run(600000, until=lambda: ta.stats["fragments"] >= 2)
-    key = key_of(ta._out[0])
-    store.delete((6 << 24) | key)  # a record of its tail rots away while it is sent
+    store.delete(_key(pid, 6))  # a record of its tail rots away while it is sent
     w.channel.loss = 0.0
     assert w.run(1200000, until=lambda: FAILED in statuses(a, pid))
     w.run(60000)
@@ -133,9 +151,9 @@ def test_a_sender_restarted_before_the_ack_does_not_deliver_twice():
     store = MemoryStore()
     w, a, b, _, ta = net(stores={"diver": store})
     pid = ta.send(w.now(), "buoy", b"status: ok, depth 12 m", 3600, 5)
-    before = dict(store._d)  # the store as a cut just before the SACK left it
+    before = _saved(store)  # the store as a cut just before the SACK left it
     assert w.run(600000, until=lambda: DELIVERED in statuses(a, pid))
-    store._d = before
+    _cut_back(store, before)
     t2 = _restart(a, w, store)
     assert t2.pending() == [pid]
     assert w.run(600000, until=lambda: statuses(a, pid).count(DELIVERED) == 2)
@@ -166,8 +184,9 @@ def test_a_sender_restarted_mid_transfer_meets_the_receivers_half_packet():
     w, a, b, _, ta = net()
     long = Prng(9).bytes(300)
     p1 = ta.send(w.now(), "buoy", long, 3600, 5)
-    tb = b.node.transport
-    assert w.run(600000, until=lambda: len(getattr(tb._rx.get(("acoustic", 2, 0)), "frags", ())) >= 4)
+    heard = b.node.links["acoustic"].stats
+    rx0 = heard["rx_frames"]
+    assert w.run(600000, until=lambda: heard["rx_frames"] - rx0 >= 4)  # 4 fragments at the buoy
     q = a.node.links["acoustic"].queue
     for r in list(q):
         q.cancel(r.req_id)  # the power went, and the queue to the modem with it
@@ -216,10 +235,10 @@ def test_packet_ids_survive_a_restart_without_a_write_per_packet():
 def test_a_cut_put_leaves_no_half_packet():
     st = MemoryStore(max_record=64)
     w, a, b, _, ta = net(stores={"diver": st})
-    ta.send(w.now(), "buoy", Prng(2).bytes(300), 3600, 5)  # 5 records
+    pid = ta.send(w.now(), "buoy", Prng(2).bytes(300), 3600, 5)  # 5 records
     keys = st.keys()
-    assert len(keys) == 6  # 5 chunks and the packet id limit
-    del st._d[key_of(ta._out[0])]  # chunk 0 is written last: cut before it
+    assert len(keys) == 6 and _key(pid) in keys  # 5 chunks and the packet id limit
+    st.delete(_key(pid))  # chunk 0 is written last: cut before it
     t2 = _restart(a, w, st)
     assert t2.pending() == [] and st.keys() == [0xFFFFFF]
 
@@ -293,9 +312,10 @@ def test_a_restarted_receiver_does_not_deliver_a_resent_packet_twice():
     sd, sb = MemoryStore(), MemoryStore()
     w, a, b, _, ta = net(stores={"diver": sd, "buoy": sb})
     pid = ta.send(w.now(), "buoy", b"alarm: low air", 3600, 2)
-    before, live = dict(sd._d), sd.live_bytes
+    before, live = _saved(sd), sd.live_bytes
     assert w.run(600000, until=lambda: DELIVERED in statuses(a, pid))
-    sd._d, sd.live_bytes = before, live  # the diver never saw the SACK
+    _cut_back(sd, before)  # the diver never saw the SACK
+    assert sd.live_bytes == live
     _restart(b, w, sb)  # the buoy restarts: a new transport on its store
     t2 = _restart(a, w, sd)
     assert t2.pending() == [pid]
