@@ -21,9 +21,9 @@ from acomm.events import AVAILABLE
 from acomm.link import BROADCAST
 from acomm.node import Node
 
-from . import nodeloop
-from .modems import DRIVERS, ModemError, ModemSpecError, add_known, hostport, keyval, load_key, open_store, parse_value
-from .udp import DEFAULT_GROUP, DEFAULT_PORT
+from .. import nodeloop
+from ..modems import DRIVERS, ModemError, ModemSpecError, add_known, hostport, keyval, load_key, open_store, parse_value
+from ..udp import DEFAULT_GROUP, DEFAULT_PORT
 
 
 def add_arguments(p):
@@ -61,8 +61,8 @@ def add_arguments(p):
 
 def _ip_links(args, node, out):
     # the UDP and TCP links asked for -> their ports
-    from .tcp import tcp_client_link, tcp_server_link
-    from .udp import udp_link
+    from ..tcp import tcp_client_link, tcp_server_link
+    from ..udp import udp_link
 
     period_ms = int((args.advert_period or 10.0) * 1000)
     ports = []
@@ -100,7 +100,7 @@ def _ip_links(args, node, out):
 
 def _modem_links(args, node):
     # -> (streams, [(link name, kind, where, StartWatch)], {link: (kind, where)})
-    from .modems import add_modem_link, parse_spec
+    from ..modems import add_modem_link, parse_spec
 
     opts = {}
     if args.advert_period is not None:
@@ -130,8 +130,8 @@ def main(args):
     """`acomm node`: exit 0 at the end, 2 for a usage error, 1 when a link cannot be opened or started."""
     from acomm.transport import Transport
 
-    from .console import Console
-    from .eventlines import Output
+    from ..console import Console
+    from ..eventlines import Output
 
     if args.udp is None and args.tcp_listen is None and args.tcp_connect is None and not args.modem:
         print("acomm node: give --modem, --udp, --tcp-listen and/or --tcp-connect", file=sys.stderr)
@@ -139,7 +139,7 @@ def main(args):
     try:
         for kv in args.send + args.known + args.driver_option:
             keyval(kv)
-        from .modems import parse_spec
+        from ..modems import parse_spec
 
         for spec in args.modem:
             parse_spec(spec)

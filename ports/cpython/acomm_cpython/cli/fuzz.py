@@ -72,7 +72,7 @@ def main(args):
         ms = None if args.cases is not None else int(args.seconds * 1000)
         tracer = None
         if args.corpus:
-            from .fuzzcov import Tracer
+            from ..fuzzcov import Tracer
 
             tracer = Tracer(args.corpus, args.trace_every)
             tracer.load_corpus(targets)
