@@ -1,0 +1,181 @@
+# A core Node driven by an asyncio event loop, so that an idle node sleeps.
+#
+# The node is sans-IO: node.step(now) reads its streams, polls its links and
+# transport and writes what they produced. Instead of calling it every few
+# milliseconds, NodeLoop calls it
+#   - when a descriptor of one of the node's ports is readable (the ports
+#     name them with filenos(): serial ports, TCP and UDP sockets), so a
+#     frame's bytes reach the driver as soon as the kernel has them;
+#   - when something asks (wake(): a request was queued);
+#   - on a timer set after each step from what the node still has to do:
+#     BUSY_MS while a frame is on the air, a reply or an ack is awaited,
+#     requests are queued or bytes wait to go; PENDING_MS while transport
+#     packets wait (their timers are seconds long); IDLE_MS otherwise.
+# An idle node therefore runs 1000 / IDLE_MS steps a second; the timers of
+# an idle link (adverts, availability loss, a driver's command timeout) fire
+# at most IDLE_MS late, which on links whose frames take seconds is noise.
+# A port without descriptors (a pyserial rfc2217:// URL) is polled at
+# BUSY_MS.
+
+from __future__ import annotations
+
+import asyncio
+import select
+from typing import Any, Callable, Dict, List, Optional, Sequence
+
+BUSY_MS = 10
+PENDING_MS = 100
+IDLE_MS = 250
+
+
+def next_wake_ms(node: Any, ports: Sequence[Any], now: int) -> int:
+    """How long the node may sleep after a step at `now` before its next step is due (ms)."""
+    for link in node.links.values():
+        if len(link.queue) or not link.idle(now):
+            return BUSY_MS
+    for p in ports:
+        pending = getattr(p, "pending", None)
+        if pending is not None and pending():
+            return BUSY_MS
+        if p.filenos() is None:
+            return BUSY_MS
+    t = node.transport
+    if t is not None and t.pending():
+        return PENDING_MS
+    return IDLE_MS
+
+
+class NodeLoop:
+    """Steps `node` on the running asyncio loop when its ports have bytes, when woken, and on its
+    next deadline. ports: the node's streams and frame ports (anything with filenos()).
+
+    after(now) callbacks run after every step (the library's futures, a console). A step that
+    raises is reported once per exception type to the loop's exception handler (or on_error)
+    and the node keeps running, as a board does."""
+
+    def __init__(self, node: Any, ports: Sequence[Any] = (), on_error: Optional[Callable[[BaseException], None]] = None):
+        self.node = node
+        self.ports: List[Any] = list(ports)
+        self.after: List[Callable[[int], None]] = []
+        self.on_error = on_error
+        self.steps = 0
+        self.step_errors = 0
+        self._loop: Optional[asyncio.AbstractEventLoop] = None
+        self._fds: Dict[int, Any] = {}
+        self._held: Dict[int, bool] = {}
+        self._timer: Optional[asyncio.TimerHandle] = None
+        self._soon = False
+        self._reported: set = set()
+        self._running = False
+
+    # -- life -----------------------------------------------------------------------
+    def start(self) -> "NodeLoop":
+        """Starts stepping on the running loop (call from a coroutine); -> self."""
+        self._loop = asyncio.get_running_loop()
+        self._running = True
+        self.wake()
+        return self
+
+    def close(self) -> None:
+        """Stops stepping: no more readers or timers (the ports stay open: their owner closes them)."""
+        self._running = False
+        if self._loop is not None:
+            for fd in list(self._fds):
+                self._loop.remove_reader(fd)
+        self._fds.clear()
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+    def add_port(self, port: Any) -> None:
+        """One more port to wait on (a link added after start)."""
+        self.ports.append(port)
+        self.wake()
+
+    def wake(self) -> None:
+        """Asks for a step as soon as the loop is free (several asks make one step)."""
+        if self._running and not self._soon and self._loop is not None:
+            self._soon = True
+            self._loop.call_soon(self._step)
+
+    # -- the step -------------------------------------------------------------------
+    def _readable(self, fd: int) -> None:
+        self._step()
+        # A descriptor still readable right after a step was not drained: a
+        # port that hung up (a pty whose other end closed stays readable
+        # with nothing to read) or more than a step reads. Its reader rests
+        # until the next timed step, so neither can spin the loop.
+        if fd not in self._fds or self._loop is None:
+            return
+        try:
+            again = bool(select.select([fd], [], [], 0)[0])
+        except (OSError, ValueError):
+            again = True  # closed under us: the next sync drops it
+        if again:
+            self._loop.remove_reader(fd)
+            del self._fds[fd]
+            self._held[fd] = True
+            self._arm(BUSY_MS)
+
+    def _step(self) -> None:
+        self._soon = False
+        if not self._running:
+            return
+        node = self.node
+        try:
+            now = node.step()
+            self.steps += 1
+            for fn in list(self.after):
+                fn(now)
+            wait = next_wake_ms(node, self.ports, now)
+        except Exception as e:  # noqa: BLE001 - as on a board: the node keeps running
+            self.step_errors += 1
+            self._report(e)
+            wait = BUSY_MS
+        self._sync_readers()
+        self._arm(wait)
+
+    def _report(self, e: BaseException) -> None:
+        if type(e) in self._reported:
+            return  # once per kind: a fault that repeats every step must not flood
+        self._reported.add(type(e))
+        if self.on_error is not None:
+            self.on_error(e)
+        elif self._loop is not None:
+            self._loop.call_exception_handler({"message": "acomm node step failed (the node carries on)",
+                                               "exception": e})
+
+    def _arm(self, wait_ms: int) -> None:
+        assert self._loop is not None
+        when = self._loop.time() + wait_ms / 1000
+        t = self._timer
+        if t is not None:
+            if t.when() <= when:
+                return  # an earlier step is already due
+            t.cancel()
+        self._timer = self._loop.call_at(when, self._timed)
+
+    def _timed(self) -> None:
+        self._timer = None
+        self._held.clear()
+        self._step()
+
+    def _sync_readers(self) -> None:
+        # the descriptors come and go (a TCP modem reconnects, a client
+        # joins a server): register what the ports name now
+        loop = self._loop
+        assert loop is not None
+        want: Dict[int, Any] = {}
+        for p in self.ports:
+            fds = p.filenos()
+            if fds:
+                for fd in fds:
+                    want[fd] = p
+        for fd in list(self._fds):
+            if fd not in want:
+                loop.remove_reader(fd)
+                del self._fds[fd]
+        for fd in want:
+            if fd not in self._fds and fd not in self._held:
+                loop.add_reader(fd, self._readable, fd)
+                self._fds[fd] = want[fd]
