@@ -189,7 +189,7 @@ class AcousticDriver(SlotDriver):
     def __init__(self):
         SlotDriver.__init__(self)
         self._now = 0
-        self._cmd = 0  # what the command slot waits for; 0 for nothing
+        self.cmd = 0  # what the command slot waits for, 0 for nothing (read it; the driver sets it)
         self._cmd_deadline = 0
         self._silent = 0  # commands unanswered in a row
         self._heard = None  # when the modem last said something valid
@@ -199,7 +199,7 @@ class AcousticDriver(SlotDriver):
 
     def _await(self, now, what, timeout_ms):
         # the command just written occupies the slot until its answer
-        self._cmd = what
+        self.cmd = what
         self._cmd_deadline = ticks_add(now, timeout_ms)
 
     def _heard_from(self, now):
@@ -210,7 +210,7 @@ class AcousticDriver(SlotDriver):
     def _pump(self, now):
         # Writes the next command when the slot is free: the configuration's
         # while configuring, once up the driver's own (_next_command).
-        if self._cmd:
+        if self.cmd:
             return
         if self._state == S_UP:
             self._next_command(now)
@@ -227,15 +227,15 @@ class AcousticDriver(SlotDriver):
         """Let timers run: the command's and the transaction's deadlines, probes, retries."""
         self._now = now
         self._begin(now)
-        if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
+        if self.cmd and ticks_diff(now, self._cmd_deadline) >= 0:
             self._cmd_timed_out(now)
         if self.slot.poll(now):
             self._slot_gave_up(now)  # its watchdog found the modem silent
         self._pump(now)
 
     def _cmd_timed_out(self, now):
-        what = self._cmd
-        self._cmd = 0
+        what = self.cmd
+        self.cmd = 0
         self.stats["cmd_timeouts"] += 1
         self._silent += 1
         self._unanswered(now, what)
@@ -270,7 +270,7 @@ class AcousticDriver(SlotDriver):
 
     def _set_up_again(self, now, wait_ms=0):
         # whatever the command slot held is gone: configure the modem again
-        self._cmd = 0
+        self.cmd = 0
         self._silent = 0
         self._hold_until = None
         self._probe = False

@@ -121,7 +121,7 @@ class BenthosDriver(AcousticDriver):
         self.mode = M_UNKNOWN
         self._owner = _O_CONFIG
         self._text = ""  # the command line, for echo and messages
-        self._want = None  # (name, value) of a setting or query
+        self.want = None  # (name, value) of a setting or query
         self._written = None  # when we last wrote to the modem
         self._probe_cmd = False  # the keepalive expects command mode
 
@@ -169,7 +169,7 @@ class BenthosDriver(AcousticDriver):
         if self._state == S_START:
             self._written = now  # the guard time counts from here
         self._begin(now)
-        if self._cmd and ticks_diff(now, self._cmd_deadline) >= 0:
+        if self.cmd and ticks_diff(now, self._cmd_deadline) >= 0:
             self._cmd_timed_out(now)
         self.slot.poll(now, self.mode == M_COMMAND)
         self._pump(now)
@@ -186,15 +186,15 @@ class BenthosDriver(AcousticDriver):
         self._write(now, b"\r")
 
     def command_at(self, now, text):
-        self._want = None
+        self.want = None
         self._command(now, C_AT, text)
 
     def command_set(self, now, name, value):
-        self._want = (name, value)
+        self.want = (name, value)
         self._command(now, C_SET, "@%s=%s" % (name, value))
 
     def command_query(self, now, name):
-        self._want = (name, "")
+        self.want = (name, "")
         self._command(now, C_QUERY, "@" + name)
 
     def command_ato(self, now):
@@ -223,7 +223,7 @@ class BenthosDriver(AcousticDriver):
         # the next command, if the serial line is free: the escape when the
         # mode is unknown, then the start-up sequence, the link's
         # transaction, or a keepalive
-        if self._cmd or self._held(now):
+        if self.cmd or self._held(now):
             return
         if self._state == S_START:
             return
@@ -249,7 +249,7 @@ class BenthosDriver(AcousticDriver):
         if self.mode != M_COMMAND:
             if ticks_diff(now, self._written) >= self.guard_ms:
                 self.stats["escapes"] += 1
-                self._want = None
+                self.want = None
                 self._command(now, C_ESCAPE, "+++")
             return
         if up:
@@ -260,7 +260,7 @@ class BenthosDriver(AcousticDriver):
     # -- outcomes of commands ----------------------------------------------------------
     def _finish(self, now, kind, ok, detail):
         # the command kind ended (ok or not)
-        self._cmd = 0
+        self.cmd = 0
         if not ok:
             self.stats["refused"] += 1
         if kind == C_ESCAPE:
@@ -328,7 +328,7 @@ class BenthosDriver(AcousticDriver):
                 self.stats["reboots"] += 1
                 self.lost(now, "modem rebooted")
                 return
-        if self._cmd and s == self._text:
+        if self.cmd and s == self._text:
             self.stats["echo"] += 1
             if self._state == S_UP:
                 # the setup turned the echo off: the modem restarted
@@ -342,12 +342,12 @@ class BenthosDriver(AcousticDriver):
             self.stats["unknown"] += 1
 
     def _prompt(self, now):
-        kind = self._cmd
+        kind = self.cmd
         if kind == C_ESCAPE:
             if self._owner == _O_PROBE and self._probe_cmd:
                 # a keepalive found the modem online, where the driver
                 # never leaves it (@OpMode=0): it restarted
-                self._cmd = 0
+                self.cmd = 0
                 self.stats["reboots"] += 1
                 self.lost(now, "modem restarted (found online)")
                 return
@@ -362,9 +362,9 @@ class BenthosDriver(AcousticDriver):
 
     def _reply(self, now, s):
         # True when s is an answer the driver knows
-        r = answer(self._cmd, self._want[0] if self._want else "", self.slot.addr, s)
+        r = answer(self.cmd, self.want[0] if self.want else "", self.slot.addr, s)
         if r is None:
             return stray(s)
         if r is not INFO:
-            self._finish(now, self._cmd, r[0], r[1])
+            self._finish(now, self.cmd, r[0], r[1])
         return True

@@ -325,7 +325,7 @@ class EvologicsDriver(AcousticDriver):
             kind = R_ERROR
         elif r.starts(b"BUSY"):
             kind = R_BUSY
-        if self._cmd:
+        if self.cmd:
             self._reply(now, r, kind)
         elif kind == R_VALUE and self._boot_text(r):
             self.stats["reboots"] += 1
@@ -343,8 +343,8 @@ class EvologicsDriver(AcousticDriver):
         return False
 
     def _reply(self, now, r, kind):
-        what = self._cmd
-        self._cmd = 0
+        what = self.cmd
+        self.cmd = 0
         self._heard_from(now)
         if kind == R_ERROR and r.starts(b"ERROR NO CONTROL") and self.config.take_control:
             self._ctrl = True  # another client took the modem: take it back

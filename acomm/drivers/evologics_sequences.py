@@ -42,7 +42,7 @@ from ..compat import const, ticks_add, ticks_diff
 from ..events import EV_DELIVERED, EV_RANGE, EV_TX_DONE, EV_TX_FAILED
 from .base import IDLE, QUEUED, ConfigSequence, SlotBase  # noqa: F401 (QUEUED: for the driver)
 
-# What the command slot waits for (the driver's _cmd): a configuration step,
+# What the command slot waits for (the driver's cmd): a configuration step,
 # or one of the driver's own commands.
 S_CTRL = const(1)
 S_MODE = const(2)

@@ -172,7 +172,7 @@ class MicroModemDriver(AcousticDriver):
         self._await(now, expect, self.modem_wait_ms)
 
     def cancel_command(self):
-        self._cmd = 0
+        self.cmd = 0
 
     def _cmd_timed_out(self, now):
         # resent up to `retries` times before it counts as unanswered
@@ -209,15 +209,15 @@ class MicroModemDriver(AcousticDriver):
         now = self._now
         f = w.fields(buf, n)
         name = f[0]
-        if self._cmd and name == self._cmd:
+        if self.cmd and name == self.cmd:
             if self._state == S_CONFIG:
                 if self.config.answer(now, f):
-                    self._cmd = 0
+                    self.cmd = 0
                 else:
                     self.stats["stale"] += 1
                 return
             if self.slot.state in ECHO and ECHO[self.slot.state] == name and self._echo_matches(f):
-                self._cmd = 0
+                self.cmd = 0
                 self.slot.echoed(now, name)
                 return
         handler = _HANDLERS.get(name)
@@ -249,8 +249,8 @@ class MicroModemDriver(AcousticDriver):
         module = w.text(f[2]) if len(f) > 2 else "?"
         msg = w.text(f[4]) if len(f) > 4 else ""
         reason = "modem error %s: %s" % (module, msg) if msg else "modem error %s" % module
-        if self._state == S_CONFIG and self._cmd:
-            self._cmd = 0
+        if self._state == S_CONFIG and self.cmd:
+            self.cmd = 0
             self.config.failed(now, reason)
         elif self.slot.error(reason):
             pass

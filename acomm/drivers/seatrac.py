@@ -315,8 +315,8 @@ class SeatracDriver(AcousticDriver):
         now = self._now
         cid = b[0]
         self._heard_from(now)
-        if cid == self._cmd:
-            self._cmd = 0
+        if cid == self.cmd:
+            self.cmd = 0
             if self._state == _S_CONFIG:
                 self.config.response(now, b, n)
             elif cid == _CID_DAT_SEND or cid == _CID_PING_SEND:

@@ -58,9 +58,9 @@ class ToyModem(AcousticDriver):
 
     def on_line(self, line):
         now = self._now
-        if not self._cmd:
+        if not self.cmd:
             return
-        self._cmd = 0
+        self.cmd = 0
         self._heard_from(now)
         if self._state != 1:  # S_CONFIG
             return

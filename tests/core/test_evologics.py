@@ -689,8 +689,8 @@ def test_driver_never_raises_on_random_lines():
                         pass
                 else:
                     d.ping(now, rng.range(0, 5))
-            elif d._cmd in CONFIG_ANSWERS and rng.chance(0.6):
-                ans = CONFIG_ANSWERS[d._cmd]
+            elif d.cmd in CONFIG_ANSWERS and rng.chance(0.6):
+                ans = CONFIG_ANSWERS[d.cmd]
                 d.feed(now, ans if ans else b"%d\r\n" % d.config.want_addr)
             elif d.slot.state in (2, 3, 4) and rng.chance(0.5):  # aimed at what is in flight
                 a = d.slot.addr

@@ -612,9 +612,9 @@ def plausible(rng, d):
     # whatever the driver is waiting for about half of the time.
     cid = (1, 2, 0x10, 0x15, 0x40, 0x42, 0x43, 0x60, 0x61, 0x61, 0x63, 0x39)[rng.below(12)]
     slot = d.slot
-    if d._cmd in (sc.CID_SYS_INFO, sc.CID_SETTINGS_GET) and rng.chance(0.6):  # configuring
-        line = SYS_INFO_EXAMPLE if d._cmd == sc.CID_SYS_INFO else settings_line(d.config.want_id)
-        return d._cmd, bytes(int(line[i : i + 2], 16) for i in range(3, len(line) - 6, 2))
+    if d.cmd in (sc.CID_SYS_INFO, sc.CID_SETTINGS_GET) and rng.chance(0.6):  # configuring
+        line = SYS_INFO_EXAMPLE if d.cmd == sc.CID_SYS_INFO else settings_line(d.config.want_id)
+        return d.cmd, bytes(int(line[i : i + 2], 16) for i in range(3, len(line) - 6, 2))
     if slot.state == 2 and rng.chance(0.6):  # the status of our command
         cid = 0x40 if slot.kind else 0x60
     elif slot.state == 3 and rng.chance(0.6):  # the outcome on the air
