@@ -216,7 +216,7 @@ def test_modem_specs_parse():
 def test_the_progress_line_on_a_terminal():
     import io
 
-    from acomm_cpython.eventlines import Output, progress_bar
+    from acomm_cpython.console.eventlines import Output, progress_bar
 
     assert progress_bar(5, 20) == "[#####...............] 5/20"
     buf = io.StringIO()

@@ -22,7 +22,7 @@ import types
 
 from acomm.compat import ticks_ms
 
-from . import nodeloop
+from .console import nodeloop
 from .boardfiles import FlashError, board_path, load_config
 
 
@@ -114,8 +114,8 @@ def main(args):
     from acomm_mp.assemble import build
     from acomm_mp.boardconfig import ConfigError
 
-    from .console import Console
-    from .eventlines import Output
+    from .console.console import Console
+    from .console.eventlines import Output
     from .modems import ModemError, StartWatch, open_store, open_stream
 
     bdir = board_dir(args.board, args.boards)

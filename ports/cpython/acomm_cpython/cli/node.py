@@ -3,7 +3,7 @@
 # UDP and TCP. It runs the same drivers, link layer and store-and-forward
 # transport as the boards; --store DIR keeps the transport's packets on disk.
 #
-# On standard input it takes console commands (acomm_cpython.console: send,
+# On standard input it takes console commands (acomm_cpython.console.console: send,
 # file, range, cancel, status, help) and prints one line per event, or JSON
 # lines with --json. The first lines say where each IP link listens and
 # which modems are up, then "ready", so a script knows when to type.
@@ -21,7 +21,7 @@ from acomm.events import AVAILABLE
 from acomm.link import BROADCAST
 from acomm.node import Node
 
-from .. import nodeloop
+from ..console import nodeloop
 from ..modems import DRIVERS, ModemError, ModemSpecError, add_known, hostport, keyval, load_key, open_store, parse_value
 from ..udp import DEFAULT_GROUP, DEFAULT_PORT
 
@@ -130,8 +130,8 @@ def main(args):
     """`acomm node`: exit 0 at the end, 2 for a usage error, 1 when a link cannot be opened or started."""
     from acomm.transport import Transport
 
-    from ..console import Console
-    from ..eventlines import Output
+    from ..console.console import Console
+    from ..console.eventlines import Output
 
     if args.udp is None and args.tcp_listen is None and args.tcp_connect is None and not args.modem:
         print("acomm node: give --modem, --udp, --tcp-listen and/or --tcp-connect", file=sys.stderr)

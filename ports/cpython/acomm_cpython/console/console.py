@@ -1,6 +1,6 @@
 # The console of a node on the command line (`acomm node`, `acomm run`):
 # one command per line, answered with dicts through an Output
-# (acomm_cpython.eventlines), so the same session reads as text or as JSON
+# (acomm_cpython.console.eventlines), so the same session reads as text or as JSON
 # lines. A line that does not parse is answered with one error and the
 # node goes on.
 #

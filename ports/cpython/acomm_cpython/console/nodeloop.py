@@ -13,7 +13,7 @@ import select
 import signal
 import time
 
-from .modems import ModemError, interrupt
+from ..modems import ModemError, interrupt
 
 _MAX_LINE = 4096
 _STEP_S = 0.005
