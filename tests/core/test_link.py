@@ -342,9 +342,16 @@ def test_availability_from_traffic_and_loss():
     assert rec.of(EV_AVAILABILITY)[-1][2:] == ("diver", AVAILABLE)
 
 
+def _advert_wait(link, since):
+    # how long after a transmission at `since` the next advert is due (Discovery.advert_due)
+    d = link.discovery
+    return [w for w in range(d.period_ms + 1) if d.advert_due(since + w, since)][0]
+
+
 def test_idle_node_advertises_and_adverts_teach_addresses():
     clk, drv, rec, link = make(advert_period_ms=10000)
     link.poll(clk())  # nothing sent yet: advertise at once
+    sent_at = clk()
     h, addr, data, ack = drv.sent[-1]
     assert addr == 0  # the modem's broadcast address
     f = fr.decode_elided(data, 1, 0)
@@ -352,7 +359,7 @@ def test_idle_node_advertises_and_adverts_teach_addresses():
     drv.finish(h)
     link.poll(clk())
     # the next one after the period less a random tenth of it at most
-    wait = link.discovery._wait
+    wait = _advert_wait(link, sent_at)
     assert 9000 <= wait <= 10000
     clk.advance(wait - 1)
     link.poll(clk())
@@ -362,7 +369,7 @@ def test_idle_node_advertises_and_adverts_teach_addresses():
     assert len(drv.sent) == 2
     drv.finish()
     # traffic postpones the next advert
-    wait = link.discovery._wait
+    wait = _advert_wait(link, clk())
     link.request(clk(), 1, "diver", b"x", 60)
     link.poll(clk())
     drv.finish()
