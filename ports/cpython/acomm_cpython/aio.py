@@ -167,11 +167,13 @@ class AsyncNode:
     """A node on asyncio: `core` is the acomm.node.Node, `transport` its HostTransport (None without).
     Made by open_node(); usable as `async with`."""
 
-    def __init__(self, core: Node, transport: Optional[HostTransport] = None, ports: Sequence[Any] = (),
+    def __init__(self, core: Node, transport: Optional[HostTransport] = None, ports: Optional[Mapping[str, Any]] = None,
                  closers: Sequence[Any] = (), watches: Sequence[Tuple[str, Any]] = ()) -> None:
         self.core = core
         self.transport = transport
-        self.loop = NodeLoop(core, ports)
+        # link name -> its byte stream or frame port (a UdpPort's .address, a TcpStream's .connected)
+        self.ports: Dict[str, Any] = dict(ports or {})
+        self.loop = NodeLoop(core, list(self.ports.values()))
         self.loop.after.append(self._after_step)
         self._closers = list(closers)
         self._watches = list(watches)
@@ -264,7 +266,9 @@ class AsyncNode:
         if st.final:
             del self._requests[key]
             if key[0] == "packet":
-                self._progress.pop(key[2], None)
+                fn, last = self._progress.pop(key[2], (None, None))
+                if fn is not None and last is not None and code == E.DELIVERED and last.acked < last.count:
+                    fn(Progress(last.count, last.count, last.count))  # the last SACK ends the transfer
 
     def _after_step(self, now: int) -> None:
         if not self._up.is_set():
@@ -336,8 +340,9 @@ class AsyncNode:
                    link: Optional[str] = None) -> Status:
         """Sends one frame to dst ("*": everyone) and returns its final Status. link: the link's name;
         by default the first on which dst is available, else the first link. Priority 1 (first)
-        to 16; the frame is dropped when it waits longer than lifespan_s. AcommError when the
-        request is refused outright (unknown destination, too big for the link)."""
+        to 16; the frame is dropped when it waits longer than lifespan_s. A request the link refuses
+        (an unknown destination, too big) ends at once with status `failed` and the reason;
+        AcommError for a link name this node does not have."""
         lk = self._pick_link(dst, link)
         rid = self.core.next_req_id()
         st = Status(lk.name, rid)
@@ -455,7 +460,9 @@ class open_node:
     "[HOST:]PORT" of a UDP link (0: any port); tcp_listen / tcp_connect: a TCP server or client
     link; known: other nodes' names -> ids; key_file: the network key (hex in a file only its owner
     reads); store: a folder for the transport's persistent store (None: in RAM); transport=False:
-    none. driver_options go to the modems' drivers, link_options to every link. ModemSpecError for
+    none. udp_peers: static UDP peers, id -> "HOST:PORT"; multicast=False: the UDP link announces
+    itself neither by multicast nor by broadcast (static and learnt peers only).
+    driver_options go to the modems' drivers, link_options to every link. ModemSpecError for
     a bad modem text, ModemError when a modem cannot be opened or does not start in time."""
 
     def __init__(self, name: str, node_id: int, modems: Sequence[str] = (), udp: Optional[str] = None,
@@ -501,7 +508,7 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
     for k, v in (known or {}).items():
         core.names.add(k, int(v))
     closers: List[Any] = []
-    ports: List[Any] = []
+    ports: Dict[str, Any] = {}
     watches: List[Tuple[str, Any]] = []
     lopts = dict(link_options or {})
     try:
@@ -513,29 +520,30 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
         for spec in modems:
             lname, stream, watch = add_modem_link(core, spec, options=dict(driver_options or {}), **lopts)
             closers.append(stream)
-            ports.append(stream)
+            ports[lname] = stream
             watches.append((lname, watch))
         if udp is not None:
             from .udp import DEFAULT_GROUP, udp_link
 
             peers = dict((int(k), hostport(v, "127.0.0.1")) for k, v in (udp_peers or {}).items())
             _, port = udp_link(core, "udp", bind=hostport(udp), group=DEFAULT_GROUP if multicast else None,
-                               peers=peers, **lopts)
+                               broadcast="255.255.255.255" if multicast else None, peers=peers, **lopts)
             closers.append(port)
-            ports.append(port)
+            ports["udp"] = port
         if tcp_listen is not None:
             from .tcp import tcp_server_link
 
             _, port = tcp_server_link(core, "tcp", bind=hostport(tcp_listen), **lopts)
             closers.append(port)
-            ports.append(port)
+            ports["tcp"] = port
         if tcp_connect is not None:
             from .tcp import tcp_client_link
 
             host, p = hostport(tcp_connect, "127.0.0.1")
-            _, port = tcp_client_link(core, host, p, "tcp" if tcp_listen is None else "tcp-out", **lopts)
+            lname = "tcp" if tcp_listen is None else "tcp-out"
+            _, port = tcp_client_link(core, host, p, lname, **lopts)
             closers.append(port)
-            ports.append(port)
+            ports[lname] = port
         t = None
         if transport:
             st = None
