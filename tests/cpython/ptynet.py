@@ -20,7 +20,8 @@ if not sys.platform.startswith("linux") and sys.platform != "darwin":
 from acomm.compat import ticks_ms  # noqa: E402
 from acomm.events import EV_RANGE_RECEIVED, EV_RECEIVED, EV_STATUS, is_final  # noqa: E402
 from acomm.node import Node  # noqa: E402
-from acomm_cpython.streams import PtyPair, open_serial  # noqa: E402
+from acomm_cpython.emulate.pty import PtyPair  # noqa: E402
+from acomm_cpython.streams import open_serial  # noqa: E402
 from acomm_sim.medium import Medium  # noqa: E402
 
 TIMEOUT_S = 10

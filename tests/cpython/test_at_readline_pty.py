@@ -18,7 +18,7 @@ if not sys.platform.startswith("linux") and sys.platform != "darwin":
     pytest.skip("needs POSIX pseudo-terminals", allow_module_level=True)
 
 from acomm.drivers import iridium_wire as w  # noqa: E402
-from acomm_cpython.emulate import EmulatorHost  # noqa: E402
+from acomm_cpython.emulate.host import EmulatorHost  # noqa: E402
 
 
 class Running:

@@ -3,7 +3,7 @@
 # copied by `acomm flash --frozen` as a user does) in the emulated Raspberry
 # Pi Pico (acomm_cpython.picoboard), with its SeaTrac on UART0 and Iridium
 # on UART1 played by the modem emulators in this process
-# (acomm_cpython.picoocean: the World's clock follows the board's).
+# (acomm_cpython.emulate.picoocean: the World's clock follows the board's).
 #
 # What a buoy at sea meets, and what must hold each time: it keeps running
 # (no reboot it did not ask for, no traceback on its console), it never
@@ -152,7 +152,7 @@ def images(tmp_path_factory):
 @contextlib.contextmanager
 def _buoy(image, tmp_path, unplugged=()):
     """The buoy booting from a copy of `image`, its ocean around it: (board, ocean)."""
-    from acomm_cpython.picoocean import PicoOcean
+    from acomm_cpython.emulate.picoocean import PicoOcean
 
     flash = str(tmp_path / "flash.img")
     shutil.copy(image, flash)

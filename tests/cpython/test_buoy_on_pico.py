@@ -78,7 +78,7 @@ def test_the_diver_report_reached_shore_once(board):
 
 
 def test_it_left_once_and_the_rebooted_buoy_finished_it_from_its_store(board):
-    from acomm_cpython import modemtaps as mt
+    from acomm_cpython.emulate import modemtaps as mt
 
     _, _, run, _ = board
     # the power cycle fell inside the Iridium session that carried the packet:

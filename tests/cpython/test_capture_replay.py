@@ -1,7 +1,7 @@
-# Record and replay: the capture format (acomm_cpython.capture),
-# `acomm replay` (acomm_cpython.replay) over the shipped fixture of every
+# Record and replay: the capture format (acomm_cpython.emulate.capture),
+# `acomm replay` (acomm_cpython.emulate.replay) over the shipped fixture of every
 # device (tests/cpython/fixtures/captures, made by tools/make_captures.py
-# from acomm_cpython.capture_sessions), damaged files reported by line, and
+# from acomm_cpython.emulate.capture_sessions), damaged files reported by line, and
 # `acomm emulate --log` on a real pseudo-terminal whose capture replays.
 # CPython only.
 
@@ -15,9 +15,9 @@ import pytest
 
 from acomm.events import EV_DELIVERED, EV_DRIVER_UP, EV_RX, EV_TX_DONE
 from acomm_cpython import cli
-from acomm_cpython.capture import CaptureError, CaptureWriter, read_capture
-from acomm_cpython.capture_sessions import BACK, MODEMS, run_session
-from acomm_cpython.replay import make_driver, replay
+from acomm_cpython.emulate.capture import CaptureError, CaptureWriter, read_capture
+from acomm_cpython.emulate.capture_sessions import BACK, MODEMS, run_session
+from acomm_cpython.emulate.replay import make_driver, replay
 
 FIXTURES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fixtures", "captures")
 
@@ -96,7 +96,7 @@ def test_emulate_log_on_a_pty_replays_the_frame_the_modem_heard(tmp_path):
     if not sys.platform.startswith("linux") and sys.platform != "darwin":
         pytest.skip("needs POSIX pseudo-terminals")
     from acomm.drivers import micromodem_wire as nm
-    from acomm_cpython.emulate import EmulatorHost
+    from acomm_cpython.emulate.host import EmulatorHost
 
     log = tmp_path / "mm.jsonl"
     a, b = str(tmp_path / "mm1"), str(tmp_path / "mm2")

@@ -18,7 +18,7 @@ if not sys.platform.startswith("linux") and sys.platform != "darwin":
 
 from acomm.events import DELIVERED, EV_RECEIVED, EV_STATUS, is_final  # noqa: E402
 from acomm.node import Node  # noqa: E402
-from acomm_cpython.emulate import MODEMS, EmulatorHost, emulator_class, parse_peer  # noqa: E402
+from acomm_cpython.emulate.host import MODEMS, EmulatorHost, emulator_class, parse_peer  # noqa: E402
 from acomm_cpython.modems import parse_value  # noqa: E402
 from acomm_cpython.streams import TcpStream, open_serial  # noqa: E402
 

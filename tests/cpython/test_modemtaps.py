@@ -1,4 +1,4 @@
-# acomm_cpython.modemtaps: the readers that say, from a serial line's bytes
+# acomm_cpython.emulate.modemtaps: the readers that say, from a serial line's bytes
 # alone, what a SeaTrac beacon and an Iridium modem did with them (the
 # figures of `acomm bench board` rest on them). Each is checked against the
 # emulated modem's own record of the same bytes: acomm's real driver talks
@@ -11,8 +11,8 @@ from acomm.drivers.iridium import IridiumDriver
 from acomm.drivers.seatrac import SeatracDriver
 from acomm.events import EV_DRIVER_UP, EV_RX
 from acomm.transport import segment as sg
-from acomm_cpython import modemtaps as mt
-from acomm_cpython.streams import PtyPair
+from acomm_cpython.emulate import modemtaps as mt
+from acomm_cpython.emulate.pty import PtyPair
 from acomm_sim.iridium import IridiumEmulator
 from acomm_sim.iridium_net import IridiumNetwork
 from acomm_sim.medium import Medium

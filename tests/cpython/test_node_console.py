@@ -181,7 +181,7 @@ def test_bad_input_gives_one_line_and_the_exit_status(tmp_path):
 
 
 def test_busy_and_silent_modems_are_named(tmp_path):
-    from acomm_cpython.streams import PtyPair
+    from acomm_cpython.emulate.pty import PtyPair
 
     with PtyPair() as pair:
         # a port someone else holds: busy

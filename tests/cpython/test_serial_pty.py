@@ -28,7 +28,8 @@ from acomm.events import (  # noqa: E402
 from acomm.link import BROADCAST  # noqa: E402
 from acomm.node import Node  # noqa: E402
 from acomm_cpython.runner import run  # noqa: E402
-from acomm_cpython.streams import PtyPair, open_serial  # noqa: E402
+from acomm_cpython.emulate.pty import PtyPair  # noqa: E402
+from acomm_cpython.streams import open_serial  # noqa: E402
 
 BAUD = 115200
 TIMEOUT_S = 5

@@ -48,8 +48,8 @@ import tempfile
 import threading
 import time
 
-from . import modemtaps as mt
-from .capture import read_capture
+from .emulate import modemtaps as mt
+from .emulate.capture import read_capture
 from .picoboard import PicoBoard, PicoError, firmware, runner_available
 
 BUOY, DIVER, SHORE = 1, 2, 3

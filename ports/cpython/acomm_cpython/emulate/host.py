@@ -14,17 +14,13 @@
 # the water does). --time-scale runs the emulated world faster than real
 # time (airtimes and propagation shrink; useful for tests). --log FILE
 # writes every byte that crosses the first modem's port, each way, with its
-# real time in ms (acomm_cpython.capture), for `acomm replay`.
+# real time in ms (acomm_cpython.emulate.capture), for `acomm replay`.
 
-import os
 import select
-import signal
 import socket
-import sys
 import time
 
-from .modems import parse_options
-from .streams import set_raw
+from .pty import Pty
 
 # name -> (module, class, default TCP port or None)
 MODEMS = {
@@ -37,7 +33,6 @@ MODEMS = {
 }
 
 _CHUNK = 4096
-_MAX_BACKLOG = 1 << 16  # bytes held for a reader that does not read
 
 
 def emulator_class(modem):
@@ -55,59 +50,6 @@ def parse_peer(text):
     path = parts[1] if len(parts) > 1 and parts[1] else None
     dist = float(parts[2]) if len(parts) > 2 and parts[2] else None
     return addr, path, dist
-
-
-class Pty:
-    # One pseudo-terminal: the slave is the "serial port" users open (its
-    # name is symlinked at `link`); we hold the master. The slave stays open
-    # here too, so the master does not read EIO while nobody has the port.
-    def __init__(self, link):
-        self.master, self.slave = os.openpty()
-        set_raw(self.slave)
-        os.set_blocking(self.master, False)
-        self.device = os.ttyname(self.slave)
-        self.link = link
-        self.backlog = bytearray()
-        if link:
-            if os.path.lexists(link):
-                if not os.path.islink(link):
-                    self.close()
-                    raise FileExistsError("%s exists and is not a symlink; not replacing it" % link)
-                os.unlink(link)
-            os.symlink(self.device, link)
-
-    def read(self):
-        try:
-            return os.read(self.master, _CHUNK)
-        except BlockingIOError:
-            return b""
-        except OSError:
-            return b""
-
-    def write(self, data):
-        self.backlog.extend(data)
-        self.flush()
-
-    def flush(self):
-        if not self.backlog:
-            return
-        try:
-            n = os.write(self.master, self.backlog)
-        except (BlockingIOError, OSError):
-            n = 0
-        del self.backlog[:n]
-        if len(self.backlog) > _MAX_BACKLOG:
-            # nobody reads the port: like a UART, drop the oldest bytes
-            del self.backlog[: len(self.backlog) - _MAX_BACKLOG]
-
-    def close(self):
-        if self.link and os.path.islink(self.link) and os.readlink(self.link) == self.device:
-            os.unlink(self.link)
-        for fd in (self.master, self.slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
 
 
 class TcpPort:
@@ -267,75 +209,3 @@ class EmulatorHost:
         if self.log is not None:
             self.log.close()
             self.log = None
-
-
-def add_arguments(p):
-    p.add_argument("modem", choices=sorted(MODEMS), help="which modem to emulate")
-    p.add_argument("--link", required=True, help="path of the symlink to the pseudo-terminal (the 'serial port')")
-    p.add_argument("--address", type=int, default=1, help="the emulated modem's own address (default 1)")
-    p.add_argument("--peer", action="append", default=[], metavar="ADDR[:PATH[:METRES]]",
-                   help="another emulated modem in the water, on its own pty when PATH is given")
-    p.add_argument("--distance", type=float, default=100.0, help="default distance between modems, m")
-    p.add_argument("--loss", type=float, default=0.0, help="probability that a packet is lost")
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--time-scale", type=float, default=1.0, help="emulated seconds per real second")
-    p.add_argument("--tcp", type=int, default=None, nargs="?", const=-1, metavar="PORT",
-                   help="also serve the modem over TCP (EvoLogics: port 9200 by default)")
-    p.add_argument("--tcp-host", default="127.0.0.1")
-    p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
-                   help="emulator option, e.g. packet_ms=100 (repeatable)")
-    p.add_argument("--log", metavar="FILE", help="write every byte of the first modem's port, each way, with its "
-                                                 "time (JSON lines; for acomm replay)")
-    p.add_argument("--mt", action="append", default=[], metavar="HEX",
-                   help="iridium, gsm: a message (hex bytes) waiting for the modem at the gateway (repeatable)")
-
-
-def main(args):
-    try:
-        options = parse_options(args.option)
-    except ValueError as e:
-        print(e, file=sys.stderr)
-        return 2
-    try:
-        incoming = [bytes.fromhex(h) for h in args.mt]
-    except ValueError:
-        print("--mt wants hex bytes", file=sys.stderr)
-        return 2
-    if incoming and args.modem not in ("iridium", "gsm"):
-        print("--mt is for iridium and gsm", file=sys.stderr)
-        return 2
-    tcp = args.tcp
-    if tcp == -1:
-        tcp = MODEMS[args.modem][2] or 0
-    log = None
-    try:
-        if args.log:
-            from .capture import CaptureWriter
-
-            log = CaptureWriter(open(args.log, "w"), args.modem)
-        host = EmulatorHost(args.modem, args.link, args.address, [parse_peer(p) for p in args.peer], options,
-                            args.distance, args.loss, args.seed, args.time_scale, tcp, args.tcp_host, incoming,
-                            log)
-    except ImportError as e:
-        print("the %s emulator is not available: %s" % (args.modem, e), file=sys.stderr)
-        return 1
-    except (OSError, TypeError, ValueError) as e:
-        print("cannot start the %s emulator: %s" % (args.modem, e), file=sys.stderr)
-        return 1
-    stopping = []
-
-    def stop(*_):
-        stopping.append(1)
-
-    signal.signal(signal.SIGTERM, stop)
-    signal.signal(signal.SIGINT, stop)
-    for st in host.stations:
-        where = "%s -> %s" % (st.pty.link, st.pty.device) if st.pty and st.pty.link else "headless"
-        if st.tcp:
-            where += ", tcp %s:%d" % (args.tcp_host, st.tcp.port)
-        print("%s emulator, address %d: %s" % (args.modem, st.address, where), flush=True)
-    try:
-        host.run(lambda: stopping)
-    finally:
-        host.close()
-    return 0

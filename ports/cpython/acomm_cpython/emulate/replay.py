@@ -1,5 +1,5 @@
 # `acomm replay FILE --driver NAME`: feed the modem -> host bytes of a
-# capture (acomm_cpython.capture) through one of acomm's drivers at their
+# capture (acomm_cpython.emulate.capture) through one of acomm's drivers at their
 # recorded times and print the events the driver yields, one per line:
 #
 #   12040 EV_DRIVER_UP
@@ -16,9 +16,7 @@
 # would have read that modem's bytes. A damaged file: one line naming the
 # file and the line, exit 2.
 
-import sys
-
-from .capture import SEND, TO_HOST, CaptureError, read_capture
+from .capture import SEND, TO_HOST
 
 # driver names: those of acomm_sim.world.MODEMS (seatrac, evologics,
 # micromodem, benthos, iridium, gsm, bpsk, fhss)
@@ -92,46 +90,3 @@ def describe(ev, names):
         else:
             parts.append(repr(x))
     return " ".join(parts)
-
-
-def add_arguments(p):
-    p.add_argument("file", help="a capture (JSON lines), e.g. from acomm emulate ... --log FILE")
-    p.add_argument("--driver", help="the driver to feed (default: the capture header's modem)")
-    p.add_argument("--address", type=int, default=1, help="the driver's own address (default 1)")
-    p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", help="driver option (repeatable)")
-    p.add_argument("--step-ms", type=int, default=10, help="poll the driver this often between records")
-    p.add_argument("--tail-ms", type=int, default=0, help="run the driver on this long after the last record")
-    p.add_argument("--writes", action="store_true", help="also print what the driver wrote ('> hex')")
-
-
-def main(args):
-    from .modems import parse_options
-
-    try:
-        with open(args.file, encoding="utf-8", errors="replace") as f:
-            header, records = read_capture(f)
-    except OSError as e:
-        print("%s: %s" % (args.file, e.strerror or e), file=sys.stderr)
-        return 2
-    except CaptureError as e:
-        print("%s:%d: damaged capture: %s" % (args.file, e.line, e.reason), file=sys.stderr)
-        return 2
-    try:
-        options = parse_options(args.option)
-    except ValueError as e:
-        print(e, file=sys.stderr)
-        return 2
-    name = args.driver or header.get("modem")
-    try:
-        driver = make_driver(name, args.address, options)
-    except (ValueError, TypeError) as e:
-        print("%s: cannot make the %s driver: %s" % (args.file, name, e), file=sys.stderr)
-        return 2
-    names = event_names()
-
-    def writes(t, data):
-        print("%d > %s" % (t, data.hex()))
-
-    for t, ev in replay(records, driver, args.step_ms, args.tail_ms, writes if args.writes else None):
-        print("%d %s" % (t, describe(ev, names)))
-    return 0

@@ -5,7 +5,7 @@
 #       serial devices (pty slaves), copying bytes both ways in a thread;
 #       tap(to, data) sees every chunk just before it is passed on, "device"
 #       (board -> modem) or "host" (modem -> board), the names of a capture
-#       file (acomm_cpython.capture).
+#       file (acomm_cpython.emulate.capture).
 #   SeatracLine(own)    the transport's segments in a SeaTrac beacon's
 #       serial traffic: DAT_SEND commands and DAT_RECEIVE answers, their
 #       elided frames, fragments and SACKs; .custody: the packet ids whose
@@ -34,7 +34,7 @@ from acomm.drivers import seatrac_wire as sw
 from acomm.errors import AcommError
 from acomm.transport import segment as sg
 
-from .streams import set_raw
+from .pty import set_raw
 
 DEVICE = "device"  # board -> modem
 HOST = "host"  # modem -> board
@@ -153,7 +153,7 @@ class Console:
 
 
 def feed_capture(reader, records):
-    """Feeds a capture's records ((t, to, data), acomm_cpython.capture.read_capture) to a reader."""
+    """Feeds a capture's records ((t, to, data), acomm_cpython.emulate.capture.read_capture) to a reader."""
     for _t, to, data in records:
         if to in (DEVICE, HOST):
             reader.feed(to, data)

@@ -5,7 +5,7 @@
 # the ones of the device's conformance table (docs/drivers-*.md): start-up,
 # one frame sent 1 -> 2 (acknowledged where the modem can), one frame back
 # 2 -> 1 (Iridium: an MT message waiting at the gateway). Node 1's serial
-# line is written as a capture (acomm_cpython.capture). Deterministic: the
+# line is written as a capture (acomm_cpython.emulate.capture). Deterministic: the
 # same code makes the same file, which a test checks.
 #
 #   python tools/make_captures.py [modem ...]    rewrites the fixtures
@@ -22,7 +22,7 @@ BACK = b"reply from 2"
 
 def run_session(modem, writer, max_ms=300000):
     """Run the session, recording node 1's line; node 1's [(t, event)], its
-    sends as ("send", handle, addr), as acomm_cpython.replay gives them."""
+    sends as ("send", handle, addr), as acomm_cpython.emulate.replay gives them."""
     from acomm_sim.medium import Medium
     from acomm_sim.world import MODEMS as FACTORIES
 
