@@ -11,17 +11,13 @@
 import json
 import signal
 import sys
-import time
 
-from acomm.compat import ticks_diff, ticks_ms
+from acomm.compat import ticks_ms
 from acomm.errors import AcommError
-from acomm.node import Node
 
-from .imcbridge import ANNOUNCE_GROUP, DATA_PORT, ImcBridge
-from acomm.apps.imcgateway import ImcGateway
-from .modems import ModemError, add_known, hostport, interrupt, keyval
-
-_SIM_STEP_MAX_MS = 1000  # simulated ms per loop round at most, so the sockets are read meanwhile
+from ..bridges.imcbridge import ANNOUNCE_GROUP, DATA_PORT, ImcBridge
+from ..bridges.imcnodes import build_real, build_sim, gateways
+from ..modems import ModemError, interrupt
 
 
 def add_arguments(p):
@@ -59,63 +55,6 @@ def add_arguments(p):
                         "as for acomm node")
 
 
-def _gateways(args, nodes):
-    names = dict(keyval(kv) for kv in args.map)
-    static = [hostport(x, "127.0.0.1") for x in args.peer]
-    out = []
-    for node in nodes:
-        gw = ImcGateway(node, args.imc_id + node.node_id, names=names, static=static, lifespan_s=args.lifespan,
-                        announce_ms=int(args.announce_period * 1000), ip_clock=ticks_ms)
-        node.listen(gw.on_event)
-        out.append(gw)
-    return out
-
-
-def _ignore(ev):
-    pass
-
-
-def build_sim(args):
-    from acomm_sim.world import World
-
-    specs = [keyval(x) for x in args.sim_node] or [("topside", "1"), ("auv", "2")]
-    world = World(seed=args.seed)
-    nodes = []
-    for i, (name, nid) in enumerate(specs):
-        # the gateway is the node's listener (_gateways): the world keeps no event list
-        sn = world.add(name, int(nid), args.sim_modem, position=(i * args.distance, 0, 5 if i else 0),
-                       listener=_ignore)
-        nodes.append(sn.node)
-    t0 = time.monotonic()
-    sim0 = world.now()
-
-    def advance():
-        # the simulated ocean keeps up with the wall clock times --speed
-        due = int((time.monotonic() - t0) * args.speed * 1000) - ticks_diff(world.now(), sim0)
-        if due >= world.step_ms:
-            world.run(min(due, _SIM_STEP_MAX_MS))
-
-    return nodes, advance, world
-
-
-def _modem_link(node, spec):
-    # the same drivers and --modem syntax as `acomm node` (acomm_cpython.modems)
-    # (the link is named after its medium: TransmissionRequest.comm_mean picks by it)
-    from .modems import add_modem_link
-
-    add_modem_link(node, spec)
-
-
-def build_real(args):
-    if args.name is None or args.id is None or not args.modem:
-        raise ValueError("without --sim, give --name, --id and at least one --modem")
-    node = Node(args.name, args.id)
-    add_known(node, args.known)
-    for spec in args.modem:
-        _modem_link(node, spec)
-    return [node], node.step, None
-
-
 def main(args):
     try:
         nodes, advance, world = build_sim(args) if args.sim else build_real(args)
@@ -125,7 +64,7 @@ def main(args):
     except (ValueError, OSError, AcommError) as e:
         print("acomm bridge imc: %s" % e, file=sys.stderr)
         return 2
-    gws = _gateways(args, nodes)
+    gws = gateways(args, nodes)
     try:
         bridge = ImcBridge(gws, ticks_ms, advance, host=args.host, port=args.port, iface=args.iface,
                            group=None if args.no_multicast else ANNOUNCE_GROUP,
