@@ -131,6 +131,10 @@ class ConsoleState:
         """{view: version}: a view's number changes whenever the view does."""
         return self._v
 
+    def held(self):
+        """Sizes of the bookkeeping kept beside the views, each bounded: requests, queueing times, buckets."""
+        return {"requests": len(self._by_req), "queued": len(self._queued), "buckets": len(self._buckets)}
+
     def t_s(self, now):
         """Seconds (0.1 s steps) since the console started, of ticks now."""
         return ticks_diff(now, self.t0) // 100 / 10

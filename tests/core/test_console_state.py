@@ -6,7 +6,7 @@
 # what the console sends arrives sealed.
 from acomm.apps.console import ALARM_SIZE, BUCKETS, LOG_SIZE, ConsoleState
 from acomm.catalog import caddy
-from acomm.events import EV_RECEIVED
+from acomm.events import DELIVERED, EV_RECEIVED, EV_STATUS, QUEUED
 from acomm_sim.world import World
 
 C = caddy.CATALOG
@@ -147,7 +147,7 @@ def test_bounded():
     for k in range(3 * LOG_SIZE):
         ev = (EV_RECEIVED, link, "diver", "buoy", C.pack([(caddy.ALARM, {"alarm": "cold"})]))
         con.on_event(ev, k * 1000)
-    assert len(con.log) == LOG_SIZE and len(con._by_req) <= LOG_SIZE
+    assert len(con.log) == LOG_SIZE and con.held()["requests"] <= LOG_SIZE
     assert len(con.alarms) == ALARM_SIZE and con.alarms[-1]["id"] == 3 * LOG_SIZE
     # an acknowledged alarm leaves first
     con.command(200000, {"op": "ack", "alarm": con.alarms[3]["id"]})
@@ -160,9 +160,9 @@ def test_bounded():
     assert con.log[-1]["cls"] == "data" and con.log[-1]["text"].startswith("ffffff"), con.log[-1]
     # statuses over more than an hour keep an hour of buckets
     for k in range(3 * BUCKETS):
-        con._status(k * 60000, "acoustic", k, 1, "")
-        con._status(k * 60000 + 100, "acoustic", k, 5, "")
-    assert len(con._buckets) == BUCKETS and len(con._queued) <= 64
+        con.on_event((EV_STATUS, link, k, QUEUED, ""), k * 60000)
+        con.on_event((EV_STATUS, link, k, DELIVERED, ""), k * 60000 + 100)
+    assert con.held()["buckets"] == BUCKETS and con.held()["queued"] <= 64
     q = con.view("quality", 3 * BUCKETS * 60000)["buckets"]
     assert len(q) <= BUCKETS
 
