@@ -162,16 +162,18 @@ def main(args):
         watches = [(ln, wheres[ln][0], wheres[ln][1], StartWatch(link.driver)) for ln, link in node.links.items()]
 
         def tick():
-            board.tick(ticks_ms())
+            now = ticks_ms()
+            board.tick(now)
+            return now
 
         w = cfg.get("web")
         if w is not None and not args.web:
             # the board's own console field, as on the board
             args.web = "%s:%d" % (w["host"], w["port"])
         tick = nodeloop.with_web(args, node, out, console, tick, closers, w["password"] if w is not None else None)
-        nodeloop.wait_started(tick, watches, out, args.startup_timeout)
+        nodeloop.wait_started(tick, watches, out, args.startup_timeout, node, streams)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
-        nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds)
+        nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds, node=node, ports=streams)
         out.emit({"event": "stopped"})
         return 0
     except ConfigError as e:

@@ -15,32 +15,42 @@ from acomm.events import CANCELED
 from acomm.transport import Transport
 
 
+def cancel(t: Transport, now: int, pid: int, reason: str = "canceled") -> bool:
+    """Ends the transport t's own pending packet pid: its fragments leave the link queues, its
+    record leaves the store and one final EV_PACKET_STATUS (canceled) follows. False when pid is
+    not one of t's own pending packets (already final, or unknown)."""
+    for p in t._out:
+        if p.pid == pid and not p.relayed:
+            for c in list(p.group) if p.group is not None else [p]:
+                t._drop(now, c)
+            t.packets.delete(p)
+            t.stats["canceled"] = t.stats.get("canceled", 0) + 1
+            t._status(p, CANCELED, reason)
+            return True
+    return False
+
+
+def progress(t: Transport, pid: int) -> Optional[Tuple[int, int, int]]:
+    """(fragments sent, fragments acknowledged, fragments in all) of the transport t's own pending
+    packet pid; None before its transfer starts (or once it is final). sent counts the
+    acknowledged ones plus those of the current round handed to the link; the receiver's SACKs
+    come at the end of each round."""
+    for p in t._out:
+        o = p.out
+        if p.pid != pid or o is None or p.relayed:
+            continue
+        acked = sum(1 for a in o.acked if a)
+        return min(o.count, acked + (0 if o.probing else o.sent_in_round)), acked, o.count
+    return None
+
+
 class HostTransport(Transport):
-    """acomm.transport.Transport with cancel() and progress() (CPython only)."""
+    """acomm.transport.Transport with cancel() and progress() as methods (CPython only)."""
 
     def cancel(self, now: int, pid: int, reason: str = "canceled") -> bool:
-        """Ends this node's own pending packet pid: its fragments leave the link queues, its record
-        leaves the store and one final EV_PACKET_STATUS (canceled) follows. False when pid is not
-        one of this node's pending packets (already final, or unknown)."""
-        for p in self._out:
-            if p.pid == pid and not p.relayed:
-                for c in list(p.group) if p.group is not None else [p]:
-                    self._drop(now, c)
-                self.packets.delete(p)
-                self.stats["canceled"] = self.stats.get("canceled", 0) + 1
-                self._status(p, CANCELED, reason)
-                return True
-        return False
+        """See cancel(t, now, pid, reason)."""
+        return cancel(self, now, pid, reason)
 
     def progress(self, pid: int) -> Optional[Tuple[int, int, int]]:
-        """(fragments sent, fragments acknowledged, fragments in all) of this node's pending packet
-        pid; None before its transfer starts (or once it is final). sent counts the acknowledged
-        ones plus those of the current round handed to the link; the receiver's SACKs come at
-        the end of each round."""
-        for p in self._out:
-            o = p.out
-            if p.pid != pid or o is None or p.relayed:
-                continue
-            acked = sum(1 for a in o.acked if a)
-            return min(o.count, acked + (0 if o.probing else o.sent_in_round)), acked, o.count
-        return None
+        """See progress(t, pid)."""
+        return progress(self, pid)

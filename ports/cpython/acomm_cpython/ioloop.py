@@ -47,14 +47,19 @@ def next_wake_ms(node: Any, ports: Sequence[Any], now: int) -> int:
 
 class NodeLoop:
     """Steps `node` on the running asyncio loop when its ports have bytes, when woken, and on its
-    next deadline. ports: the node's streams and frame ports (anything with filenos()).
+    next deadline. ports: the node's streams and frame ports (anything with filenos()); step:
+    what one round is (default node.step; it may return the time or None).
 
     after(now) callbacks run after every step (the library's futures, a console). A step that
     raises is reported once per exception type to the loop's exception handler (or on_error)
     and the node keeps running, as a board does."""
 
-    def __init__(self, node: Any, ports: Sequence[Any] = (), on_error: Optional[Callable[[BaseException], None]] = None):
+    def __init__(self, node: Any, ports: Sequence[Any] = (), on_error: Optional[Callable[[BaseException], None]] = None,
+                 step: Optional[Callable[[], Any]] = None):
         self.node = node
+        # one round of work: node.step, or what wraps it (a board's tick with
+        # its applications' timers, a web console's lock)
+        self._step_fn: Callable[[], Any] = step if step is not None else node.step
         self.ports: List[Any] = list(ports)
         self.after: List[Callable[[int], None]] = []
         self.on_error = on_error
@@ -123,7 +128,9 @@ class NodeLoop:
             return
         node = self.node
         try:
-            now = node.step()
+            now = self._step_fn()
+            if now is None:
+                now = node.clock()
             self.steps += 1
             for fn in list(self.after):
                 fn(now)

@@ -128,7 +128,7 @@ def _send_when_heard(console, node, dst, text):
 
 def main(args):
     """`acomm node`: exit 0 at the end, 2 for a usage error, 1 when a link cannot be opened or started."""
-    from acomm.transport import Transport
+    from ..hosttransport import HostTransport
 
     from ..console.console import Console
     from ..console.eventlines import Output
@@ -158,13 +158,15 @@ def main(args):
     try:
         if key is not None:
             node.set_auth(Auth(key, args.tag_len, args.auth_counters), commands(), strict=not args.auth_open)
-        closers += _ip_links(args, node, out)
+        ports = _ip_links(args, node, out)
+        closers += ports
         streams, watches, wheres = _modem_links(args, node)
         closers += streams
+        ports += streams  # what the loop waits on
         store = open_store(args.store) if args.store else None
         if store is not None:
             closers.append(store)
-        transport = Transport.of(node, store=store)
+        transport = HostTransport.of(node, store=store)
         if args.inbox:
             import os
 
@@ -173,14 +175,14 @@ def main(args):
         node.listen(console.on_event)
         # typed lines, the --send list and the page's commands, one at a time
         tick = nodeloop.with_web(args, node, out, console, node.step, closers)
-        nodeloop.wait_started(tick, watches, out, args.startup_timeout)
+        nodeloop.wait_started(tick, watches, out, args.startup_timeout, node, ports)
         out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         pending = [keyval(m) for m in args.send]
 
         def send_pending():
             pending[:] = [m for m in pending if not _send_when_heard(console, node, m[0], m[1])]
 
-        nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds, send_pending)
+        nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds, send_pending, node=node, ports=ports)
         for dst, _ in pending:
             out.emit({"event": "error", "error": "not sent: %s was never heard" % dst})
         out.emit({"event": "stopped"})

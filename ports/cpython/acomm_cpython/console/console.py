@@ -26,6 +26,7 @@ from acomm.errors import AcommError
 from acomm.events import AVAILABLE, EV_AVAILABILITY, EV_PACKET, EV_PACKET_STATUS, EV_REFUSED, EV_STATUS
 from acomm.link import BROADCAST
 
+from ..hosttransport import progress
 from .eventlines import as_dict
 
 HELP = (
@@ -339,17 +340,11 @@ class Console:
         t = self.transport
         if t is None or not self._progress:
             return
-        # the transport keeps its transfers' state to itself (no API on the
-        # buoy's path for a display it never has): read, never changed
-        for p in t._out:
-            o = p.out
-            if p.pid not in self._progress or o is None or p.relayed:
-                continue
-            acked = sum(1 for a in o.acked if a)
-            sent = min(o.count, acked + (0 if o.probing else o.sent_in_round))
-            if (sent, acked) != self._progress[p.pid]:
-                self._progress[p.pid] = (sent, acked)
-                self.out.emit({"event": "progress", "id": p.pid, "sent": sent, "acked": acked, "count": o.count})
+        for pid in list(self._progress):
+            p = progress(t, pid)
+            if p is not None and p[:2] != self._progress[pid]:
+                self._progress[pid] = p[:2]
+                self.out.emit({"event": "progress", "id": pid, "sent": p[0], "acked": p[1], "count": p[2]})
 
 
 def as_text_short(d):

@@ -1,40 +1,37 @@
 # The real-time loop of a node with a console (`acomm node`, `acomm run`):
-# wait for every modem's start-up, then step the node and read console
+# wait for every modem's start-up, then run the node and read console
 # lines from standard input until the end of input, --seconds, Ctrl-C or
 # SIGTERM. On the way out every stream and the store are closed, so a
 # persistent store is left as the last synced record left it.
 #
-# Standard input is read with os.read on its descriptor, not readline():
-# several lines that arrive at once would otherwise sit in Python's buffer
-# where select() cannot see them.
+# Both run on asyncio with acomm_cpython.ioloop.NodeLoop: the node steps
+# when a modem's or a socket's bytes arrive, when a console line asks for
+# something, and at its next deadline, so an idle node sleeps (it used to
+# step every 5 ms). Standard input is one more reader of the loop, read
+# with os.read on its descriptor (several lines arriving at once would
+# otherwise sit in Python's buffer where the loop cannot see them). Ctrl-C
+# and SIGTERM set a flag through the loop's signal handlers: the loop ends
+# between two steps, never inside one.
 
+import asyncio
 import os
-import select
 import signal
-import time
 
-from ..modems import ModemError, interrupt
+from ..ioloop import NodeLoop
+from ..modems import ModemError
 
 _MAX_LINE = 4096
-_STEP_S = 0.005
 
 
 class LineReader:
-    """Whole lines from a file descriptor without blocking; None at the end of input."""
+    """Whole lines from the bytes of a descriptor: feed() what os.read gave, b"" at the end."""
 
-    def __init__(self, fd):
-        self.fd = fd
+    def __init__(self):
         self.buf = b""
         self.eof = False
 
-    def lines(self, wait_s):
-        """The lines complete within wait_s seconds (a list, maybe empty)."""
-        if self.eof or not select.select([self.fd], [], [], wait_s)[0]:
-            return []
-        try:
-            data = os.read(self.fd, 4096)
-        except OSError:
-            data = b""
+    def feed(self, data):
+        """-> the lines data completes (a list, maybe empty); b"" ends the input (its last line)."""
         if not data:
             self.eof = True
             rest, self.buf = self.buf, b""
@@ -46,69 +43,139 @@ class LineReader:
         return [ln.decode("utf-8", "replace") for ln in done]
 
 
-def wait_started(tick, watches, out, timeout_s):
-    """Steps until every modem said it is up; ModemError names the first that did not in time.
+class _Stop:
+    # the signals that end the loop, set through the loop's own handlers
+    def __init__(self, loop):
+        self.loop = loop
+        self.event = asyncio.Event()
+        self.signals = []
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                loop.add_signal_handler(sig, self.event.set)
+                self.signals.append(sig)
+            except (ValueError, RuntimeError, NotImplementedError):
+                pass  # not the main thread: the caller's own handling stands
 
-    watches: [(link name, kind, where, modems.StartWatch)]."""
+    def close(self):
+        for sig in self.signals:
+            self.loop.remove_signal_handler(sig)
+
+
+def wait_started(tick, watches, out, timeout_s, node, ports=()):
+    """Runs the node until every modem said it is up; ModemError names the first that did not in
+    time; KeyboardInterrupt on Ctrl-C or SIGTERM meanwhile.
+
+    watches: [(link name, kind, where, modems.StartWatch)]; tick: one round of the node; ports:
+    its streams and frame ports (what the loop waits on)."""
+    return asyncio.run(_wait_started(tick, watches, out, timeout_s, node, ports))
+
+
+async def _wait_started(tick, watches, out, timeout_s, node, ports):
+    loop = asyncio.get_running_loop()
+    stop = _Stop(loop)
     shown = set()
-    end = time.monotonic() + timeout_s
-    while True:
-        tick()
+    done = asyncio.Event()
+
+    def check(now):
         for name, kind, where, w in watches:
             if w.up and name not in shown:
                 shown.add(name)
                 out.emit({"event": "link_up", "link": name, "kind": kind, "where": where})
         if len(shown) == len(watches):
-            return
-        if time.monotonic() >= end:
-            late = [w for w in watches if w[0] not in shown][0]
-            raise ModemError("the %s modem on %s did not answer its start-up within %g s" % (late[1], late[2],
-                                                                                             timeout_s))
-        time.sleep(_STEP_S)
+            done.set()
+
+    nl = NodeLoop(node, ports, step=tick)
+    nl.after.append(check)
+    nl.start()
+    waits = [asyncio.ensure_future(done.wait()), asyncio.ensure_future(stop.event.wait())]
+    try:
+        await asyncio.wait(waits, timeout=timeout_s, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        for w in waits:
+            w.cancel()
+        nl.close()
+        stop.close()
+    if stop.event.is_set():
+        raise KeyboardInterrupt
+    if not done.is_set():
+        late = [w for w in watches if w[0] not in shown][0]
+        raise ModemError("the %s modem on %s did not answer its start-up within %g s" % (late[1], late[2], timeout_s))
 
 
-def serve(tick, console, stdin_fd, seconds=None, poll=None, stop_at_eof=True):
+def serve(tick, console, stdin_fd, seconds=None, poll=None, stop_at_eof=True, node=None, ports=()):
     """Runs until the end of input (when stop_at_eof), `seconds`, Ctrl-C or SIGTERM; returns 0.
 
     tick(): one round of the node; poll(): called after it (the --send
     list); console lines go to console.command(). At the end of input
     (without `seconds`) it first waits for what the console asked for to
     end (console.open: each ends by its lifespan at the latest), so a
-    script piping commands in gets their outcome."""
-    old = signal.signal(signal.SIGTERM, interrupt)
-    reader = LineReader(stdin_fd) if stdin_fd is not None else None
-    end = None if seconds is None else time.monotonic() + seconds
-    draining = False
-    reported = set()
+    script piping commands in gets their outcome. node and ports: what
+    the loop steps and waits on (acomm_cpython.ioloop)."""
+    return asyncio.run(_serve(tick, console, stdin_fd, seconds, poll, stop_at_eof, node, ports))
+
+
+async def _serve(tick, console, stdin_fd, seconds, poll, stop_at_eof, node, ports):
+    loop = asyncio.get_running_loop()
+    stop = _Stop(loop)
+    state = {"draining": False}
+    reader = LineReader() if stdin_fd is not None else None
+
+    def step_error(e):
+        console.error("during a step: %s: %s (carrying on)" % (type(e).__name__, e))
+
+    nl = NodeLoop(node, ports, on_error=step_error, step=tick)
+
+    def after(now):
+        console.poll()
+        if poll is not None:
+            poll()
+        if reader is None or not reader.eof or not stop_at_eof or seconds is not None:
+            return
+        if not console.open:
+            stop.event.set()
+        elif not state["draining"]:
+            state["draining"] = True
+            console.out.emit({"event": "draining", "open": len(console.open)})
+
+    nl.after.append(after)
+    watching = False
+
+    def take(data):
+        for line in reader.feed(data):
+            console.command(line)
+        nl.wake()
+
+    def readable():
+        try:
+            data = os.read(stdin_fd, 4096)
+        except BlockingIOError:
+            return
+        except OSError:
+            data = b""
+        if not data:
+            loop.remove_reader(stdin_fd)
+        take(data)
+
+    if reader is not None:
+        try:
+            loop.add_reader(stdin_fd, readable)
+            watching = True
+        except (PermissionError, ValueError, OSError):
+            # a regular file (or /dev/null) on standard input: always
+            # readable, so the loop cannot wait on it; it is read now
+            while not reader.eof:
+                take(os.read(stdin_fd, 1 << 16))
+    nl.start()
+    timer = loop.call_later(seconds, stop.event.set) if seconds is not None else None
     try:
-        while end is None or time.monotonic() < end:
-            try:
-                tick()
-            except Exception as e:  # noqa: BLE001 - as on a board: the node keeps running, the store holds
-                kind = type(e).__name__
-                if kind not in reported:  # once per kind: a fault that repeats every step must not flood
-                    reported.add(kind)
-                    console.error("during a step: %s: %s (carrying on)" % (kind, e))
-            console.poll()
-            if poll is not None:
-                poll()
-            if reader is None or reader.eof:
-                time.sleep(_STEP_S)
-                if reader is not None and stop_at_eof and end is None and not console.open:
-                    break
-                continue
-            for line in reader.lines(_STEP_S):
-                console.command(line)
-            if reader.eof and stop_at_eof and end is None:
-                if not console.open:
-                    break
-                if not draining:
-                    draining = True
-                    console.out.emit({"event": "draining", "open": len(console.open)})
-    except KeyboardInterrupt:
-        pass
+        await stop.event.wait()
     finally:
-        signal.signal(signal.SIGTERM, old)
+        if timer is not None:
+            timer.cancel()
+        if watching:
+            loop.remove_reader(stdin_fd)
+        nl.close()
+        stop.close()
     return 0
 
 
