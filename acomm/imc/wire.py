@@ -55,7 +55,7 @@ TYPE_CODES = {
 }
 
 # per integer code: struct letter, size, lowest, highest
-_INTS = (
+INTS = (
     ("b", 1, -0x80, 0x7F),
     ("B", 1, 0, 0xFF),
     ("h", 2, -0x8000, 0x7FFF),
@@ -66,8 +66,8 @@ _INTS = (
 )
 # formats per byte order (0 little, 1 big), made once
 _FMT = (
-    tuple("<" + t[0] for t in _INTS) + ("<f", "<Q", "<HHHQHBHB", "<H"),
-    tuple(">" + t[0] for t in _INTS) + (">f", ">Q", ">HHHQHBHB", ">H"),
+    tuple("<" + t[0] for t in INTS) + ("<f", "<Q", "<HHHQHBHB", "<H"),
+    tuple(">" + t[0] for t in INTS) + (">f", ">Q", ">HHHQHBHB", ">H"),
 )
 _F32 = const(7)
 _U64 = const(8)
@@ -84,7 +84,7 @@ def check_int(code, v):
     # v as the wire's integer for type code, or EncodeError.
     if not isinstance(v, int):
         raise EncodeError("%r is not an int" % (v,))
-    t = _INTS[code]
+    t = INTS[code]
     if v < t[2] or v > t[3]:
         raise EncodeError("%d outside %s [%d, %d]" % (v, ("int8", "uint8", "int16", "uint16", "int32", "uint32", "int64")[code], t[2], t[3]))
     return v
@@ -153,7 +153,7 @@ class Reader:
         return p
 
     def int(self, code):
-        p = self.need(_INTS[code][1])
+        p = self.need(INTS[code][1])
         return struct.unpack_from(_FMT[self.big][code], self.buf, p)[0]
 
     def u16(self):

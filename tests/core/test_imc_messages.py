@@ -20,7 +20,7 @@ def _text(rng, n):
 def _value(rng, code, depth):
     # a random value of a field type that survives a round trip exactly
     if code <= wire.I64:
-        lo, hi = wire._INTS[code][2], wire._INTS[code][3]
+        lo, hi = wire.INTS[code][2], wire.INTS[code][3]
         pick = rng.below(4)
         if pick == 0:
             return lo
