@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from acomm_cpython import sweep
+from acomm_cpython.demo import sweep
 
 # a tiny grid: 4 nodes, 1 simulated minute per run (a fraction of a second each)
 GRID = ["loss=0,0.3", "mac=tdma,aloha"]

@@ -16,14 +16,14 @@ import sys
 COMMANDS = {
     "bench": ("bench", "run a benchmark; prints JSON lines with --json"),
     "bridge": ("bridge", "a gateway to another protocol: 'bridge imc' speaks IMC over UDP (DUNE, Neptus)"),
-    "demo": ("..demo", "run the demonstration mission on the simulated ocean"),
+    "demo": ("demo", "run the demonstration mission on the simulated ocean"),
     "emulate": ("emulate", "an emulated modem on a pseudo-terminal (and TCP)"),
     "flash": ("..flash", "copy a board's program (boards/NAME) to a MicroPython board with mpremote"),
     "fuzz": ("fuzz", "random and mutated inputs against every decoder, driver and the store"),
     "node": ("node", "a node on modems (--modem KIND:DEVICE), UDP and/or TCP, with a console on stdin"),
     "replay": ("replay", "feed a capture (acomm emulate --log) through a driver and print its events"),
     "run": ("..boardrun", "run a board's program (boards/NAME) on this computer, its UARTs on serial ports"),
-    "sweep": ("..sweep", "a parameter study: a grid of simulated runs over seeds, locally or on Dask"),
+    "sweep": ("sweep", "a parameter study: a grid of simulated runs over seeds, locally or on Dask"),
 }
 
 

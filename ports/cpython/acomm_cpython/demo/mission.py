@@ -19,18 +19,16 @@
 #  1200  end
 from acomm.catalog import caddy, teleop
 from acomm.events import AVAIL_NAMES, EV_AVAILABILITY, EV_RECEIVED, EV_STATUS, FAILED, EXPIRED
-from acomm.drivers.mac import Tdma
+from acomm.drivers.mac import Aloha, Tdma
 from acomm_sim.caddy import CaddyCycle
 from acomm_sim.channel import Channel
 from acomm_sim.world import World
 
 from .apps import CADDY, DiveLog, Periodic, Pilot, Timetable, Vehicle, dive_log_lines
+from .places import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
 from .traffic import Traffic
 
 LINK = "acoustic"
-BUOY, DIVER, AUV = "buoy", "diver", "auv"
-ADDR = {BUOY: 1, DIVER: 2, AUV: 3}
-START = {BUOY: (0.0, 0.0, 0.5), DIVER: (45.0, 30.0, 12.0), AUV: (-25.0, 40.0, 6.0)}
 PARTS = {BUOY: "X150 USBL", DIVER: "X110 modem", AUV: "X150 USBL"}
 
 # The TDMA cycle (owner, ms, guard ms): the diver has most of the time (its
@@ -47,6 +45,8 @@ TX_MS = {BUOY: 4200, DIVER: 5100, AUV: 1200}
 TELEOP_SLOTS = ((BUOY, 3000, GUARD_MS), (AUV, 2000, GUARD_MS), (BUOY, 3000, GUARD_MS), (DIVER, 6000, GUARD_MS))
 TELEOP_TX_MS = {BUOY: 1200, DIVER: 5100, AUV: 1200}
 
+MACS = ("tdma", "aloha", "none")
+
 # traffic classes: (priority, lifespan s); lower priority numbers go first
 CLASSES = {
     "alarm": (1, 600),
@@ -57,7 +57,6 @@ CLASSES = {
     "position": (5, 60),
     "log": (12, 1500),
 }
-LOSS_CURVE = ((0.0, 0.02), (150.0, 0.05), (500.0, 0.4), (800.0, 1.0))
 
 
 def _fmt(ms):
@@ -66,9 +65,14 @@ def _fmt(ms):
 
 
 class Mission:
-    def __init__(self, seed=1, minutes=20, say=None, caddy_phase=True, usbl_noise=None):
+    def __init__(self, seed=1, minutes=20, say=None, caddy_phase=True, usbl_noise=None, mac="tdma"):
         # usbl_noise: (range m, bearing degrees), the largest error of the
-        # X150s' fixes (uniform); None: exact fixes, as the figures assume
+        # X150s' fixes (uniform); None: exact fixes, as the figures assume.
+        # mac: the channel access wherever the plan sets a schedule: "tdma"
+        # (the plan's slots), "aloha" (random access) or "none" (acomm sweep)
+        if mac not in MACS:
+            raise ValueError("mac is %s, not %r" % (", ".join(MACS), mac))
+        self.mac = mac
         self.seed = seed
         self.end_ms = int(minutes * 60000)
         self.timeline = []  # (ms, tag, text)
@@ -173,9 +177,15 @@ class Mission:
 
     def _macs(self, slots, tx_ms, now=0):
         # every node switches at the same planned instant; the new cycle
-        # starts there (slots=None: no schedule)
+        # starts there (slots=None: no schedule). Without TDMA (self.mac)
+        # the schedule's times are Aloha's or nobody's
         for name, sn in self.nodes.items():
-            sn.link.driver.mac = None if slots is None else Tdma(slots, name, now, tx_ms[name])
+            if slots is None or self.mac == "none":
+                sn.link.driver.mac = None
+            elif self.mac == "aloha":
+                sn.link.driver.mac = Aloha(10000, seed=self.seed * 100 + sn.node.node_id)
+            else:
+                sn.link.driver.mac = Tdma(slots, name, now, tx_ms[name])
 
     def _caddy_start(self, now):
         if not self.caddy_phase:

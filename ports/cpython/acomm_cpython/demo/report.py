@@ -124,14 +124,22 @@ def _f(v, fmt="%.2f"):
     return "-" if v is None else fmt % v
 
 
-def plots(m, outdir):
-    # -> paths written, or [] when matplotlib is missing
+def pyplot():
+    """matplotlib.pyplot drawing to files (the Agg backend), or None when matplotlib is missing."""
     try:
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
+        return None
+    return plt
+
+
+def plots(m, outdir):
+    # -> paths written, or [] when matplotlib is missing
+    plt = pyplot()
+    if plt is None:
         return []
     log = m.traffic.log
     rows = [log.rows[p] for p in log.order]

@@ -20,7 +20,7 @@ import time
 from acomm.catalog import seaware
 from acomm.errors import AcommError
 
-from .mission import ADDR, BUOY
+from .places import ADDR, BUOY
 
 USBL_NOISE = (0.3, 1.0)  # range m, bearing degrees: the largest error, uniform
 

@@ -22,7 +22,7 @@ import shutil
 import tempfile
 import time
 
-from acomm_cpython import sweep
+from acomm_cpython.demo import sweep
 
 PER_RUNTIME = ()
 GRID = ["loss=0,0.1,0.2", "mac=tdma,aloha"]

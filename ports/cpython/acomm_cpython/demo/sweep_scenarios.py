@@ -86,23 +86,12 @@ def measures(log, collisions, sim_s):
 # -- demo ---------------------------------------------------------------------------
 
 def _demo(p, seed, minutes):
-    from acomm.drivers.mac import Aloha
-
-    from .demo.mission import Mission
+    from .mission import MACS, Mission
 
     mac = p["mac"]
-    if mac not in ("tdma", "aloha", "none"):
+    if mac not in MACS:
         raise ValueError("demo: mac is tdma, aloha or none, not %r" % (mac,))
-
-    class SweepMission(Mission):
-        def _macs(self, slots, tx_ms, now=0):
-            if mac == "tdma":
-                return Mission._macs(self, slots, tx_ms, now)
-            for name, sn in self.nodes.items():
-                on = mac == "aloha" and slots is not None
-                sn.link.driver.mac = Aloha(10000, seed=seed * 100 + sn.node.node_id) if on else None
-
-    m = SweepMission(seed=seed, minutes=minutes)
+    m = Mission(seed=seed, minutes=minutes, mac=mac)
     m.channel.loss = float(p["loss"])
     m.run()
     return measures(m.traffic.log, m.channel.collided, m.world.now() / 1000)
@@ -138,7 +127,7 @@ def _grid(p, seed, minutes):
     from acomm_sim.packetmodem import PROFILES
     from acomm_sim.world import World
 
-    from .demo.traffic import Traffic
+    from .traffic import Traffic
 
     n = int(p["nodes"])
     if not 2 <= n <= 254:

@@ -7,6 +7,8 @@ import os
 
 from acomm_sim.metrics import bootstrap_ci, mean
 
+from .report import pyplot
+
 PANELS = (("pdr", "PDR"), ("latency_p50_s", "median latency (s)"))
 
 
@@ -52,12 +54,8 @@ def plot_all(rows, grid, out):
     """-> paths of the PNGs written ([] without matplotlib or a swept parameter)."""
     if not grid:
         return []
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
+    plt = pyplot()
+    if plt is None:
         return []
     paths = []
     for param, values in grid:
