@@ -38,4 +38,4 @@ def test_a_draw_between_skips_is_the_same_draw():
         for _ in range(n):
             ref.next32()
         assert r.chance(0.3) == ref.chance(0.3)
-        assert r._s == ref._s
+        assert r.next32() == ref.next32()  # and still the same state: the same next draw
