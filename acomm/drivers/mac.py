@@ -88,22 +88,22 @@ class Aloha:
     def __init__(self, max_backoff_ms, seed=1):
         self.max_backoff_ms = max_backoff_ms
         self.rng = Prng(seed)
-        self._until = None
+        self.until = None  # ticks when the backoff drawn for the next frame ends; None: none drawn
         self.backoffs = 0
 
     def may_start(self, now):
-        u = self._until
+        u = self.until
         if u is None or ticks_diff(now, u) > self.max_backoff_ms:
             wait = self.rng.below(self.max_backoff_ms + 1) if self.max_backoff_ms > 0 else 0
-            self._until = u = ticks_add(now, wait)
+            self.until = u = ticks_add(now, wait)
             self.backoffs += 1
         return ticks_diff(now, u) >= 0
 
     def next_start(self, now):
-        return now if self._until is None else self._until
+        return now if self.until is None else self.until
 
     def sent(self, now):
-        self._until = None  # the next frame draws a new backoff
+        self.until = None  # the next frame draws a new backoff
 
 
 class MacDriver:

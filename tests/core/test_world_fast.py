@@ -60,7 +60,7 @@ def _same(mac_kind):
             continue
         if hasattr(da.mac, "rng"):  # ALOHA (TDMA's held counts the polls, fewer when skipped)
             assert da.held == db.held, (mac_kind, name, da.held, db.held)
-            assert da.mac.backoffs == db.mac.backoffs and da.mac._until == db.mac._until, (mac_kind, name)
+            assert da.mac.backoffs == db.mac.backoffs and da.mac.until == db.mac.until, (mac_kind, name)
             assert da.mac.rng.next32() == db.mac.rng.next32(), (mac_kind, name)
     # and the shortcuts were taken: fewer node steps
     assert a.node_steps < b.node_steps, (a.node_steps, b.node_steps)

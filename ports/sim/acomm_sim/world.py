@@ -125,7 +125,7 @@ def _catch_up(sn, now):
     b = mac.max_backoff_ms
     t = ticks_add(s, q)
     while ticks_diff(now, t) > 0:
-        u = mac._until
+        u = mac.until
         if u is None or ticks_diff(t, u) > b:
             if not mac.may_start(t):  # a draw
                 d.held += 1
