@@ -6,7 +6,7 @@
 #       qemu-system-arm; every test module
 #   --target rp2040   build/firmware/rp2040-full.uf2, MicroPython's own
 #       RPI_PICO firmware with the same modules frozen in, in the RP2040
-#       emulator (tools/rp2040/runner.mjs, through acomm_cpython.picoboard);
+#       emulator (tools/rp2040/runner.mjs, through acomm_cpython.board.picoboard);
 #       the tests listed in tools/rp2040_tests.txt (why a list: see there)
 #
 # (both built by tools/firmware.py). What the tests need and the firmware
@@ -43,7 +43,7 @@ import zlib
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "ports", "cpython"))
 
-from acomm_cpython.qemuboard import QemuBoard, QemuError  # noqa: E402
+from acomm_cpython.board.qemuboard import QemuBoard, QemuError  # noqa: E402
 
 FW = os.path.join(ROOT, "build", "firmware")
 
@@ -174,7 +174,7 @@ def select(path):
 
 def _start_board(target, heap):
     if target.name == TARGETS["rp2040"].name:
-        from acomm_cpython.picoboard import PicoBoard, PicoError
+        from acomm_cpython.board.picoboard import PicoBoard, PicoError
 
         try:
             return PicoBoard(target.firmware)
@@ -366,7 +366,7 @@ def main(argv=None):
     timeout = a.timeout or target.timeout
     t_all = time.monotonic()
     if a.target == "rp2040":
-        from acomm_cpython.picoboard import runner_available
+        from acomm_cpython.board.picoboard import runner_available
 
         why = runner_available()
         if why:

@@ -9,7 +9,7 @@
 #         make BOARD=RPI_PICO FROZEN_MANIFEST=/path/to/ports/micropython/manifest.py
 #   ports/micropython/manifests/NAME.py   one per folder of boards/: only
 #       that board's import closure (the modules `acomm flash` copies, as
-#       acomm_cpython.boardfiles computes them), as micropython-lib splits
+#       acomm_cpython.board.boardfiles computes them), as micropython-lib splits
 #       aioble into feature manifests; what a production build of that
 #       board freezes (tools/firmware.py builds the buoy's)
 #
@@ -87,11 +87,11 @@ def package_json(root):
 
 def _closure(root, board_dir):
     # {package: [files relative to the package]} of the board's import
-    # closure, from acomm_cpython.boardfiles (the tree's own copy)
+    # closure, from acomm_cpython.board.boardfiles (the tree's own copy)
     for p in (os.path.join(root, "ports", "cpython"), os.path.join(root, "ports", "micropython"), root):
         if p not in sys.path:
             sys.path.insert(0, p)
-    from acomm_cpython import boardfiles
+    from acomm_cpython.board import boardfiles
 
     dirs = boardfiles.package_dirs(root)
     out = {}

@@ -23,8 +23,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from acomm_cpython import boardfiles
-from acomm_cpython.qemuboard import QemuBoard, QemuError, firmware
+from acomm_cpython.board import boardfiles
+from acomm_cpython.board.qemuboard import QemuBoard, QemuError, firmware
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ACOMM = os.path.join(os.path.dirname(sys.executable), "acomm")

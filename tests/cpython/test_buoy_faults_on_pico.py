@@ -1,7 +1,7 @@
 # Faults on the buoy's own chip: boards/buoy_pico running from its firmware
 # (build/firmware/buoy_pico.uf2, acomm frozen in, main.py and config.py
 # copied by `acomm flash --frozen` as a user does) in the emulated Raspberry
-# Pi Pico (acomm_cpython.picoboard), with its SeaTrac on UART0 and Iridium
+# Pi Pico (acomm_cpython.board.picoboard), with its SeaTrac on UART0 and Iridium
 # on UART1 played by the modem emulators in this process
 # (acomm_cpython.emulate.picoocean: the World's clock follows the board's).
 #
@@ -36,7 +36,7 @@ import time
 import pytest
 
 from acomm.events import DELIVERED, EV_PACKET, EV_PACKET_STATUS, TRANSMITTED
-from acomm_cpython.picoboard import PicoBoard, firmware, runner_available
+from acomm_cpython.board.picoboard import PicoBoard, firmware, runner_available
 
 ACOMM = os.path.join(os.path.dirname(sys.executable), "acomm")
 FIRMWARE = firmware("buoy_pico")
@@ -49,7 +49,7 @@ DIVER, SHORE = 2, 3  # boards/buoy_pico's peers
 
 
 def _cfg():
-    from acomm_cpython import boardfiles
+    from acomm_cpython.board import boardfiles
     from acomm_mp.boardconfig import check
 
     return check(boardfiles.load_config(boardfiles.board_path("buoy_pico")))

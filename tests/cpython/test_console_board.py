@@ -16,7 +16,7 @@ import urllib.request
 
 import pytest
 
-from acomm_cpython.boardfiles import plan
+from acomm_cpython.board.boardfiles import plan
 from acomm_mp.boardconfig import ConfigError, check
 from consoleprocs import free_port
 

@@ -72,7 +72,7 @@ def test_the_buoy_firmware_freezes_its_import_closure_and_nothing_else_of_acomm(
     for p in (os.path.join(ROOT, "ports", "cpython"), os.path.join(ROOT, "ports", "micropython")):
         if p not in sys.path:
             sys.path.insert(0, p)
-    from acomm_cpython import boardfiles
+    from acomm_cpython.board import boardfiles
 
     closure = set()
     for name, path in boardfiles.modules(os.path.join(ROOT, "boards", "buoy_pico"), root=ROOT).items():

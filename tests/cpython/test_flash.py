@@ -13,7 +13,8 @@ import time
 
 import pytest
 
-from acomm_cpython import boardfiles, cli, flash
+from acomm_cpython import cli
+from acomm_cpython.board import boardfiles, flash
 
 ROOT = boardfiles.repo_root()
 BOARDS = os.path.join(ROOT, "boards")

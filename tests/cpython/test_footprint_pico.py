@@ -14,7 +14,7 @@ import sys
 
 import pytest
 
-from acomm_cpython.picoboard import firmware, runner_available
+from acomm_cpython.board.picoboard import firmware, runner_available
 from acomm_cpython.workloads import footprint_pico as fp
 
 ACOMM = os.path.join(os.path.dirname(sys.executable), "acomm")
@@ -100,7 +100,7 @@ def test_the_buoy_flashed_to_a_stock_pico_reports_its_free_heap_at_boot(tmp_path
     # acomm flash onto the stock firmware, then the buoy's own ready line at
     # power-up: empty, then holding 8 packets of 1 KiB (seeded on its flash
     # at its config's store path), which cost it heap
-    from acomm_cpython.picoflash import PICO_WALL0, boot_free, flash_image
+    from acomm_cpython.board.picoflash import PICO_WALL0, boot_free, flash_image
     from acomm_cpython.workloads.footprint_minute import seed_store
 
     stock = _need("rp2040-stock")

@@ -7,7 +7,7 @@
 # too small the MemoryError is a failed run, never a pass.
 import pytest
 
-from acomm_cpython.qemuboard import firmware
+from acomm_cpython.board.qemuboard import firmware
 from acomm_cpython.workloads import footprint_runners as fr
 
 ELF = firmware("cm3-full")

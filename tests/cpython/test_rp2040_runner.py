@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from acomm_cpython.picoboard import PicoBoard, firmware, runner_available
+from acomm_cpython.board.picoboard import PicoBoard, firmware, runner_available
 
 MPREMOTE = os.path.join(os.path.dirname(sys.executable), "mpremote")
 FIRMWARE = firmware("rp2040-stock")

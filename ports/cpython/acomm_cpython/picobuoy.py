@@ -1,5 +1,5 @@
 # The buoy on its own chip: boards/buoy_pico flashed with `acomm flash` onto
-# an emulated Raspberry Pi Pico (acomm_cpython.picoboard, MicroPython's own
+# an emulated Raspberry Pi Pico (acomm_cpython.board.picoboard, MicroPython's own
 # RPI_PICO firmware) as onto a real one, between two emulated modems, with
 # the diver's tablet program on a second emulated Pico. CPython only; used by
 # `acomm bench board` and tests/cpython/test_buoy_on_pico.py.
@@ -50,7 +50,7 @@ import time
 
 from .emulate import modemtaps as mt
 from .emulate.capture import read_capture
-from .picoboard import PicoBoard, PicoError, firmware, runner_available
+from .board.picoboard import PicoBoard, PicoError, firmware, runner_available
 
 BUOY, DIVER, SHORE = 1, 2, 3
 READY = {"buoy": b"acomm buoy: node 1", "diver": b"acomm diver: node 2"}
@@ -90,7 +90,7 @@ def _die_with_parent():
 
 def diver_board(boards_dir, period_s):
     """boards/diver_esp32s3 mapped to an RP2040, as boards_dir/diver_pico; returns its checked config."""
-    from .boardfiles import board_path, load_config
+    from .board.boardfiles import board_path, load_config
 
     src = board_path("diver_esp32s3")
     g = {}
@@ -271,7 +271,7 @@ class Run:
             c.close()
         self.cons = []
         store_copy = self.path("acomm.store")
-        from .flash import mpremote_command
+        from .board.flash import mpremote_command
 
         cp = subprocess.run(mpremote_command() + ["connect", buoy.usb, "fs", "cp", ":/data/acomm.store", store_copy],
                             stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)

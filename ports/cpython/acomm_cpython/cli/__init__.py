@@ -18,19 +18,18 @@ COMMANDS = {
     "bridge": ("bridge", "a gateway to another protocol: 'bridge imc' speaks IMC over UDP (DUNE, Neptus)"),
     "demo": ("demo", "run the demonstration mission on the simulated ocean"),
     "emulate": ("emulate", "an emulated modem on a pseudo-terminal (and TCP)"),
-    "flash": ("..flash", "copy a board's program (boards/NAME) to a MicroPython board with mpremote"),
+    "flash": ("flash", "copy a board's program (boards/NAME) to a MicroPython board with mpremote"),
     "fuzz": ("fuzz", "random and mutated inputs against every decoder, driver and the store"),
     "node": ("node", "a node on modems (--modem KIND:DEVICE), UDP and/or TCP, with a console on stdin"),
     "replay": ("replay", "feed a capture (acomm emulate --log) through a driver and print its events"),
-    "run": ("..boardrun", "run a board's program (boards/NAME) on this computer, its UARTs on serial ports"),
+    "run": ("run", "run a board's program (boards/NAME) on this computer, its UARTs on serial ports"),
     "sweep": ("sweep", "a parameter study: a grid of simulated runs over seeds, locally or on Dask"),
 }
 
 
 def command(name):
     """The front-end module of subcommand `name` (imported now)."""
-    m = COMMANDS[name][0]
-    return importlib.import_module(m if m.startswith(".") else "." + m, __name__)
+    return importlib.import_module("." + COMMANDS[name][0], __name__)
 
 
 def _chosen(argv):

@@ -33,7 +33,7 @@ def main(args):
         print("--only is for the footprint bench", file=sys.stderr)
         return 2
     if "footprint" in names:
-        from ..boardfiles import in_checkout
+        from ..board.boardfiles import in_checkout
 
         if not in_checkout() and args.name == "all":
             print("note: footprint skipped: it needs the firmware built in an acomm source checkout", file=sys.stderr)

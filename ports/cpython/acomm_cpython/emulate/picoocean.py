@@ -1,5 +1,5 @@
 # The ocean around a board running on an emulated Raspberry Pi Pico
-# (acomm_cpython.picoboard), for tests that put faults on the board's lines:
+# (acomm_cpython.board.picoboard), for tests that put faults on the board's lines:
 # an acomm_sim World in this process (the board's own modems, and its peers'
 # nodes with their modems) whose clock follows the board's simulated clock,
 # and a cable from each of the board's UARTs (the runner's TCP port) to

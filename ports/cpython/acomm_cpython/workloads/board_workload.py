@@ -58,7 +58,7 @@ def run(emit):
     emit("rp2040_flash_seconds", round(r["flash_seconds"], 2), "s")
     emit("rp2040_boot_to_ready_ms", round(r["boot_to_ready_ms"], 1), "ms")
     emit("rp2040_first_boot_to_ready_ms", round(r["first_boot_ms"], 1), "ms")
-    from acomm_cpython.picoflash import heap_free
+    from acomm_cpython.board.picoflash import heap_free
 
     free = heap_free(r["buoy_console"])
     if len(free) < 2:

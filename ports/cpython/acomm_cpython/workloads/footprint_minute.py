@@ -15,7 +15,7 @@ import json
 import os
 import time
 
-from acomm_cpython import boardfiles
+from acomm_cpython.board import boardfiles
 from acomm_sim.boardsim import add_peers, fast_options, send_traffic
 from acomm_sim.world import World
 

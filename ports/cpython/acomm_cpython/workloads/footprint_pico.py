@@ -1,11 +1,11 @@
 # The buoy's minute (footprint_minute) on its own chip: a Raspberry Pi Pico
 # (RP2040, Cortex-M0+) running MicroPython v1.28.0's rp2 firmware in the
-# rp2040js emulator (acomm_cpython.picoboard). The lockstep harness is
+# rp2040js emulator (acomm_cpython.board.picoboard). The lockstep harness is
 # started through the raw REPL on the USB CDC port and speaks the protocol
 # over it, as run_qemu's does over the Cortex-M3's UART.
 #
 #   run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True) -> run_qemu's dict
-#   (flash_image, boot_free: acomm_cpython.picoflash)
+#   (flash_image, boot_free: acomm_cpython.board.picoflash)
 #   image_bytes(uf2)                   a firmware's size in flash
 #   pool_of(region) / region_of(pool)  the GC's table overhead
 #
@@ -46,8 +46,8 @@ import shutil
 import tempfile
 import time
 
-from acomm_cpython import boardfiles
-from acomm_cpython.picoflash import PICO_WALL0, boot_free, flash_image
+from acomm_cpython.board import boardfiles
+from acomm_cpython.board.picoflash import PICO_WALL0, boot_free, flash_image
 from acomm_cpython.workloads.footprint_minute import (BOARD, LOAD_PACKETS, SIM_MS, SerialPipe, judge, minute, result,
                                                        seed_store)
 from acomm_cpython.workloads.footprint_runners import _read_until, put_files
@@ -172,7 +172,7 @@ def run_pico(uf2, heap=None, store=None, mpy=None, info=False, peak=True, seed=1
     plus "pool" (the heap's pool in bytes, see the header) and "harness"
     (what importing the harness took).
     """
-    from acomm_cpython.picoboard import PicoBoard
+    from acomm_cpython.board.picoboard import PicoBoard
 
     cfg = boardfiles.load_config(boardfiles.board_path(BOARD))
     tmp = tempfile.mkdtemp(prefix="acomm-footprint-pico-")
@@ -265,7 +265,7 @@ ROOMY = 128 * 1024  # the roomy run's GC region, as the Cortex-M3's (footprint_w
 
 def need(name):
     """build/firmware/NAME.uf2, else RuntimeError with the one line that says how to get it."""
-    from acomm_cpython.picoboard import firmware
+    from acomm_cpython.board.picoboard import firmware
 
     p = firmware(name)
     if p is None:
@@ -275,7 +275,7 @@ def need(name):
 
 def missing():
     """None when the emulated Pico can run here, else one line saying what is missing."""
-    from acomm_cpython.picoboard import runner_available
+    from acomm_cpython.board.picoboard import runner_available
 
     return runner_available()
 
@@ -284,7 +284,7 @@ def boot_figures(emit):
     # cheap (one boot): the images' sizes in flash, and the heap the stock
     # firmware leaves free at its REPL (littlefs formatted and mounted by its
     # _boot.py; the raw REPL command's own bytecode counts as used)
-    from acomm_cpython.picoboard import PicoBoard
+    from acomm_cpython.board.picoboard import PicoBoard
 
     stock = need("rp2040-stock")
     emit("flash_image_rp2040_stock_bytes", image_bytes(stock), "bytes")

@@ -17,7 +17,7 @@ import subprocess
 import tempfile
 import time
 
-from acomm_cpython import boardfiles
+from acomm_cpython.board import boardfiles
 from acomm_cpython.workloads.footprint_minute import (BOARD, LOAD_PACKETS, SIM_MS, ProcPipe, SerialPipe, judge, minute,
                                                       result)
 
@@ -149,7 +149,7 @@ def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LI
     figures, "fail" (None on a pass, else why) and "text" (what the board
     printed besides the protocol: mem_info with info, tracebacks).
     """
-    from acomm_cpython.qemuboard import QemuBoard
+    from acomm_cpython.board.qemuboard import QemuBoard
 
     cfg = boardfiles.load_config(boardfiles.board_path(BOARD))
     deadline = time.monotonic() + limit_s
@@ -191,7 +191,7 @@ def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LI
 
 
 def micropython_i386():
-    from acomm_cpython.qemuboard import firmware
+    from acomm_cpython.board.qemuboard import firmware
 
     return firmware("micropython-i386")
 

@@ -34,7 +34,7 @@
 #       whole heap, without the harness's .mpy (heap_harness_mpy_rp2040:
 #       what it took); heap_free_mpy_rp2040[_loaded] what the buoy's own
 #       ready line reports free after a collection when the flashed Pico
-#       boots (holding the seeded store: acomm_cpython.picoflash.boot_free)
+#       boots (holding the seeded store: acomm_cpython.board.picoflash.boot_free)
 #
 # The RP2040 groups are in the default run (the figures come from
 # `acomm bench footprint`) but take most of its time: a Pico minute is 1-2
@@ -114,7 +114,7 @@ def _text_bytes(elf):
 
 
 def _fw(name):
-    from acomm_cpython.qemuboard import firmware
+    from acomm_cpython.board.qemuboard import firmware
 
     p = firmware(name)
     if p is None:

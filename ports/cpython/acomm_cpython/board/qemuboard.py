@@ -20,6 +20,8 @@ import re
 import subprocess
 import time
 
+from .boardfiles import repo_root
+
 HEAP_WORD = 0x21FFFFF8
 HEAP_MAGIC = 0x48454150
 ROMFS_PART0 = 0x21000000
@@ -42,12 +44,6 @@ def _die_with_parent():
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
-
-
-def repo_root():
-    import acomm
-
-    return os.path.dirname(os.path.dirname(os.path.abspath(acomm.__file__)))
 
 
 def firmware(name):

