@@ -51,6 +51,6 @@ def test_the_oracle_catches_a_foreign_exception_and_a_driver_that_stops():
 
     # the probe's check fails for a driver that hears nothing
     t = fuzz_drivers.DriverTarget(fuzz_drivers.SPECS[4])
-    w, a, b = fuzz_drivers._world(t.spec)
+    w, a, b = fuzz_drivers.two_nodes(t.spec)
     a.host_end.read = lambda n=-1: None  # the buoy's driver goes deaf
-    assert not fuzz_drivers._exchange(w, a, b, "acoustic", b"x", 60000)
+    assert not fuzz_drivers.exchange(w, a, b, "acoustic", b"x", 60000)

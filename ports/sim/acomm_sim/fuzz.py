@@ -7,7 +7,7 @@
 # code under MicroPython. Portable Python, stdlib only; randomness from
 # acomm.prng so that a seed gives the same inputs on both runtimes.
 #
-# A target is an object with
+# A target is an object (fuzz_base.Target, or any with these) with
 #   name          short name (the CLI's --target)
 #   corpus        list of valid inputs (bytes), built with acomm's encoders
 #   run(data, rng) feeds one input to the decoder and checks its oracle;
@@ -27,10 +27,9 @@ from acomm.prng import Prng
 from acomm.compat import ticks_diff as _diff
 from acomm.compat import ticks_ms as _ms
 
-
-class Failure(Exception):
-    # An oracle broken by an input (not an acomm error: it must escape).
-    pass
+# the leaf the targets share with the engine (acomm_sim.fuzz.Failure and
+# .mutate stay importable from here)
+from .fuzz_base import Failure, mutate
 
 
 def name_hash(s):
@@ -43,92 +42,6 @@ def name_hash(s):
 
 def case_rng(seed, name, case):
     return Prng((seed * 0x9E3779B1 + name_hash(name) + case * 0x85EBCA6B) & 0xFFFFFFFF)
-
-
-# -- mutators ---------------------------------------------------------------
-# Each takes (rng, data, corpus) and returns new bytes. Sizes stay bounded
-# (at most the input plus 64 bytes per step, a few steps per case) so a
-# decoder's time per case stays small.
-
-def _flip(rng, d, corpus):
-    if not d:
-        return d
-    b = bytearray(d)
-    for _ in range(1 + rng.below(4)):
-        p = rng.below(len(b) * 8)
-        b[p >> 3] ^= 0x80 >> (p & 7)
-    return bytes(b)
-
-
-_SPECIAL = (0, 1, 0x7F, 0x80, 0xFF, 0x0A, 0x0D, 0x24, 0x2C, 0x2A, 0xC0, 0xDB, 0xFE)
-
-
-def _set(rng, d, corpus):
-    if not d:
-        return d
-    b = bytearray(d)
-    for _ in range(1 + rng.below(3)):
-        b[rng.below(len(b))] = _SPECIAL[rng.below(len(_SPECIAL))] if rng.chance(0.5) else rng.below(256)
-    return bytes(b)
-
-
-def _truncate(rng, d, corpus):
-    if not d:
-        return d
-    if rng.chance(0.5):
-        return d[: rng.below(len(d))]
-    return d[rng.below(len(d)) :]
-
-
-def _extend(rng, d, corpus):
-    tail = rng.bytes(1 + rng.below(32))
-    return d + tail if rng.chance(0.7) else tail + d
-
-
-def _insert(rng, d, corpus):
-    p = rng.below(len(d) + 1)
-    return d[:p] + rng.bytes(1 + rng.below(16)) + d[p:]
-
-
-def _delete(rng, d, corpus):
-    if len(d) < 2:
-        return d
-    p = rng.below(len(d))
-    return d[:p] + d[p + 1 + rng.below(min(8, len(d) - p)) :]
-
-
-def _splice(rng, d, corpus):
-    # the head of one valid input and the tail of another
-    o = corpus[rng.below(len(corpus))]
-    return d[: rng.below(len(d) + 1)] + o[rng.below(len(o) + 1) :]
-
-
-def _concat(rng, d, corpus):
-    # two valid inputs back to back, maybe garbage in between
-    o = corpus[rng.below(len(corpus))]
-    mid = rng.bytes(rng.below(8)) if rng.chance(0.5) else b""
-    return d + mid + o
-
-
-def _repeat(rng, d, corpus):
-    if not d:
-        return d
-    a = rng.below(len(d))
-    n = 1 + rng.below(min(16, len(d) - a))
-    return d[: a + n] + d[a : a + n] * (1 + rng.below(3)) + d[a + n :]
-
-
-MUTATORS = (_flip, _set, _truncate, _extend, _insert, _delete, _splice, _concat, _repeat)
-
-
-def mutate(rng, corpus, limit=4096):
-    # A valid input changed by 1..3 mutators, or (1 in 16) plain noise.
-    if not corpus or rng.below(16) == 0:
-        return rng.bytes(rng.below(64))
-    d = corpus[rng.below(len(corpus))]
-    for _ in range(1 + rng.below(3)):
-        d = MUTATORS[rng.below(len(MUTATORS))](rng, d, corpus)
-    return d[:limit]
 
 
 # -- running ------------------------------------------------------------------

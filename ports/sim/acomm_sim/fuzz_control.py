@@ -25,7 +25,7 @@ from acomm.node import Node
 from acomm.prng import Prng
 from acomm.transport import Transport
 
-from .fuzz import Failure
+from .fuzz_base import Failure, Target
 
 KEY = b"fuzzing the control plane, 32 b"
 
@@ -111,8 +111,6 @@ def _frames(data):
 
 
 def target():
-    from .fuzz_decoders import Target
-
     def run(data, rng):
         node, link, events = _node()
         node.send("acoustic", "peer", b"waiting", 60, ack=True, now=0)
@@ -153,8 +151,6 @@ def file_target(tmpdir):
     import os
 
     from acomm.frame.auth import OP_DROP, OP_INSTALL, OP_USE, key_command
-
-    from .fuzz_decoders import Target
 
     path = (tmpdir or "/tmp") + "/acomm-fuzz-auth-file"  # as fuzz_store does without a folder
     rng = Prng(307)

@@ -10,16 +10,7 @@ from acomm.transport import segment
 from acomm.errors import AcommError
 from acomm.prng import Prng
 
-from .fuzz import Failure
-
-
-class Target:
-    def __init__(self, name, corpus, run, make=None):
-        self.name = name
-        self.corpus = corpus
-        self.run = run
-        if make is not None:
-            self.make = make
+from .fuzz_base import Failure, Target
 
 
 def _frame_target():

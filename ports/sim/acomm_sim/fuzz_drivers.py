@@ -16,7 +16,7 @@
 
 from acomm.events import DELIVERED, EV_RECEIVED, EV_STATUS, is_final
 
-from .fuzz import Failure, mutate
+from .fuzz_base import Failure, mutate
 from .world import MODEMS, World
 
 PROBE_EVERY = 64
@@ -40,7 +40,7 @@ SPECS = (
 )
 
 
-def _world(spec, tap=None):
+def two_nodes(spec, tap=None):
     # Two nodes on one modem type, both drivers up. tap(now, bytes) sees
     # what the buoy's modem writes to its host.
     name, modem, link, dopts, eopts, lopts = spec
@@ -63,7 +63,7 @@ def _world(spec, tap=None):
     return w, a, b
 
 
-def _exchange(w, a, b, link, tag, limit_ms):
+def exchange(w, a, b, link, tag, limit_ms):
     # one acknowledged packet each way, one after the other (a half-duplex
     # medium loses two at once); -> True when both were delivered
     def final(sn, rid):
@@ -87,8 +87,8 @@ class DriverTarget:
         self.spec = spec
         self.name = spec[0]
         timeline = []
-        w, a, b = _world(spec, lambda t, d: timeline.append((t, d)))
-        if not _exchange(w, a, b, spec[2], b"corpus", PROBE_MS):
+        w, a, b = two_nodes(spec, lambda t, d: timeline.append((t, d)))
+        if not exchange(w, a, b, spec[2], b"corpus", PROBE_MS):
             raise RuntimeError("%s: no delivery against the emulators" % self.name)
         self.timeline = timeline
         self.corpus = [d for _, d in timeline if d]
@@ -121,18 +121,18 @@ class DriverTarget:
         d.take_events()
 
     def probe(self, data, rng):
-        w, a, b = _world(self.spec)
+        w, a, b = two_nodes(self.spec)
         # the corpus holds whole valid packets (ids 1 each way): a warm-up
         # exchange moves the probe's ids past them, or a replayed copy
         # would make the probe a duplicate that is rightly suppressed
-        if not _exchange(w, a, b, self.spec[2], b"warm-up", PROBE_MS):
+        if not exchange(w, a, b, self.spec[2], b"warm-up", PROBE_MS):
             raise RuntimeError("%s: no delivery before the garbage" % self.name)
         host = a.host_end
         for k in range(1 + rng.below(4)):
             w.run(rng.below(3000))
             host.inject(data if k == 0 else mutate(rng, self.corpus, 512))
         w.run(1000)
-        if not _exchange(w, a, b, self.spec[2], b"probe", PROBE_MS):
+        if not exchange(w, a, b, self.spec[2], b"probe", PROBE_MS):
             raise Failure("%s: no delivery both ways within %d s after the garbage" % (self.name, PROBE_MS // 1000))
 
 

@@ -13,7 +13,7 @@ from acomm.transport.packetstore import PacketStore
 from acomm.prng import Prng
 from acomm.transport.store import Store
 
-from .fuzz import Failure
+from .fuzz_base import Failure
 
 
 def _rm(p):
