@@ -1,6 +1,6 @@
 # Regenerate BENCHMARKS.md: runs `acomm bench compare --json` (echoing its
 # lines), describes this machine, and writes the file with
-# acomm_cpython.benchmarks_md. Install the peers first: pip install -e '.[bench]'.
+# acomm_cpython.bench.benchmarks_md. Install the peers first: pip install -e '.[bench]'.
 #
 #   .venv/bin/python tools/mkbenchmarks.py [--out BENCHMARKS.md]
 #   .venv/bin/python tools/mkbenchmarks.py --render-only   # re-render the kept figures
@@ -28,7 +28,7 @@ def machine():
     except OSError:
         pass
     mp = "no micropython"
-    from acomm_cpython.bench import find_micropython
+    from acomm_cpython.bench.runtime import find_micropython
 
     exe = find_micropython()
     if exe:
@@ -58,7 +58,7 @@ def main():
     ap.add_argument("--footprint", metavar="FILE",
                     help="with --render-only: the footprint figures from this `acomm bench footprint --json` output")
     args = ap.parse_args()
-    from acomm_cpython import benchmarks_md as bm
+    from acomm_cpython.bench import benchmarks_md as bm
 
     if args.render_only:
         with open(args.out) as f:

@@ -64,7 +64,7 @@ def demo(seed=1, minutes=20):
 
 
 def soak(hours, rate_scale, seed):
-    from acomm_cpython.workloads.soak_workload import soak as run
+    from acomm_cpython.bench.workloads.soak_workload import soak as run
 
     f, _, _ = run(seed=seed, hours=hours, rate_scale=rate_scale, trace=False)
     return f
@@ -72,7 +72,7 @@ def soak(hours, rate_scale, seed):
 
 def sim_bench():
     from acomm.events import EV_RECEIVED
-    from acomm_cpython.workloads import sim_workload as sw
+    from acomm_cpython.bench.workloads import sim_workload as sw
 
     sw.World = _timed_worlds()
     out = {}
@@ -86,7 +86,7 @@ def sim_bench():
 
 
 def scale(nodes, sim_s):
-    from acomm_cpython.workloads import sim_workload as sw
+    from acomm_cpython.bench.workloads import sim_workload as sw
 
     if not hasattr(sw, "run_scale"):
         return None

@@ -2,7 +2,7 @@
 # ocean for 12 simulated minutes. In strict mode (the default with a key)
 # none of its attacks succeeds and the legitimate packets all arrive once;
 # in open mode forged SACKs succeed, which is what the bench is there to show.
-from acomm_cpython.workloads.attack_workload import KINDS, Attack
+from acomm_cpython.bench.workloads.attack_workload import KINDS, Attack
 
 
 def _figures(strict):

@@ -7,10 +7,10 @@ import os
 
 import pytest
 
-from acomm_cpython import benchmarks_md as bm
-from acomm_cpython.workloads import compare_items as ci
-from acomm_cpython.workloads import compare_peers as cp
-from acomm_cpython.workloads import compare_workload as cw
+from acomm_cpython.bench import benchmarks_md as bm
+from acomm_cpython.bench.workloads import compare_items as ci
+from acomm_cpython.bench.workloads import compare_peers as cp
+from acomm_cpython.bench.workloads import compare_workload as cw
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PATH = os.path.join(ROOT, "BENCHMARKS.md")

@@ -1,5 +1,5 @@
 # The buoy on its own chip, as `acomm bench board --json` runs it
-# (acomm_cpython.picobuoy): boards/buoy_pico flashed with `acomm flash
+# (acomm_cpython.bench.picobuoy): boards/buoy_pico flashed with `acomm flash
 # --reset` onto an emulated Raspberry Pi Pico, the diver's tablet program on
 # a second one, `acomm emulate seatrac` between them, `acomm emulate iridium`
 # and an `acomm node` as shore behind the buoy. The diver's report must reach
@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from acomm_cpython import picobuoy
+from acomm_cpython.bench import picobuoy
 
 ACOMM = os.path.join(os.path.dirname(sys.executable), "acomm")
 _missing = picobuoy.missing()

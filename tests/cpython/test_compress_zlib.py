@@ -4,7 +4,7 @@
 import zlib
 
 from acomm.codec.compress import compress, decompress
-from acomm_cpython.workloads.divelog import divelog
+from acomm_cpython.bench.workloads.divelog import divelog
 
 
 def test_divelog_ratio_close_to_zlib9():

@@ -2,7 +2,7 @@
 # period after the last node powers on (every node hears each other node's
 # next advert within one period; the newcomer's own advert goes at once).
 
-from acomm_cpython.workloads import discovery_workload as dw
+from acomm_cpython.bench.workloads import discovery_workload as dw
 
 
 def test_discovery_within_one_period_and_deterministic():

@@ -9,7 +9,7 @@ import os
 import shutil
 import tempfile
 
-from acomm_cpython.workloads import footprint_runners as fr
+from acomm_cpython.bench.workloads import footprint_runners as fr
 
 
 def test_the_lockstep_minute_runs_and_a_tiny_heap_fails():

@@ -15,7 +15,7 @@ import sys
 import pytest
 
 from acomm_cpython.board.picoboard import firmware, runner_available
-from acomm_cpython.workloads import footprint_pico as fp
+from acomm_cpython.bench.workloads import footprint_pico as fp
 
 ACOMM = os.path.join(os.path.dirname(sys.executable), "acomm")
 
@@ -43,7 +43,7 @@ def test_heap_min_is_the_first_of_three_sizes_in_a_row_that_passed():
     # near the edge the outcome depends on where fragments fall: a size that
     # fails above one that passed restarts the count, and the size above the
     # failure must pass itself (here 8,704 fails too)
-    from acomm_cpython.workloads.footprint_workload import bisect
+    from acomm_cpython.bench.workloads.footprint_workload import bisect
 
     tried = {}
 
@@ -101,7 +101,7 @@ def test_the_buoy_flashed_to_a_stock_pico_reports_its_free_heap_at_boot(tmp_path
     # power-up: empty, then holding 8 packets of 1 KiB (seeded on its flash
     # at its config's store path), which cost it heap
     from acomm_cpython.board.picoflash import PICO_WALL0, boot_free, flash_image
-    from acomm_cpython.workloads.footprint_minute import seed_store
+    from acomm_cpython.bench.workloads.footprint_minute import seed_store
 
     stock = _need("rp2040-stock")
     img = str(tmp_path / "flash.img")

@@ -8,7 +8,7 @@
 import pytest
 
 from acomm_cpython.board.qemuboard import firmware
-from acomm_cpython.workloads import footprint_runners as fr
+from acomm_cpython.bench.workloads import footprint_runners as fr
 
 ELF = firmware("cm3-full")
 pytestmark = pytest.mark.skipif(ELF is None, reason="build/firmware/cm3-full.elf not built (python3 tools/firmware.py build)")

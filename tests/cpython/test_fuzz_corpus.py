@@ -3,7 +3,7 @@
 import json
 
 from acomm_cpython.cli import main
-from acomm_cpython.fuzzcov import function_lines
+from acomm_cpython.bench.fuzzcov import function_lines
 
 
 def _lines(capsys):

@@ -1,9 +1,9 @@
-# A short soak (acomm_cpython.workloads.soak_workload): the demo network
+# A short soak (acomm_cpython.bench.workloads.soak_workload): the demo network
 # for 1.5 simulated hours with every fault kind at 12 times the 24-hour
 # run's rate, then drained. Every accepted packet must end delivered or
 # reported expired/failed, none delivered twice or damaged, no exception
 # may escape a node's step, and every fault kind must really have happened.
-from acomm_cpython.workloads.soak_workload import RATES, soak
+from acomm_cpython.bench.workloads.soak_workload import RATES, soak
 
 
 def test_short_soak_loses_nothing_and_every_fault_happened():

@@ -1,7 +1,7 @@
 # Seed 004's teleoperation replay (acomm bench teleop): latency follows the
 # modem profiles' airtime and the propagation delay, and acomm's encoding
 # puts fewer bytes on the modem than the seed's 14.
-from acomm_cpython.workloads import teleop_workload as tw
+from acomm_cpython.bench.workloads import teleop_workload as tw
 
 
 def test_latency_follows_airtime_and_acomm_is_smaller(monkeypatch):

@@ -1,5 +1,5 @@
 # A board's node alone in a MicroPython process, stepped in lock with a
-# simulated ocean that runs elsewhere (acomm_cpython.workloads.footprint_
+# simulated ocean that runs elsewhere (acomm_cpython.bench.workloads.footprint_
 # minute): the heap holds only what the board holds (node, links,
 # drivers, transport, store), not the emulators or the other nodes, so
 # `-X heapsize=` finds the board's own smallest heap.

@@ -1,6 +1,6 @@
 # The buoy flashed onto an emulated stock Pico (acomm_cpython.board.picoboard) as
 # a user flashes a real one, for the footprint figures
-# (acomm_cpython.workloads.footprint_pico):
+# (acomm_cpython.bench.workloads.footprint_pico):
 #
 #   flash_image(stock_uf2, out, harness=True)  `acomm flash --board buoy_pico`
 #       onto the stock firmware; the 2 MiB flash image written to `out`

@@ -1,10 +1,10 @@
 # `acomm bench NAME [--json]`: the front end of the benchmarks' table
-# (acomm_cpython.bench), which runs each workload on CPython and, for the
+# (acomm_cpython.bench.table), which runs each workload on CPython and, for the
 # figures that depend on the runtime, under the MicroPython unix port.
 import json
 import sys
 
-from .. import bench
+from ..bench import table as bench
 
 
 def add_arguments(b):

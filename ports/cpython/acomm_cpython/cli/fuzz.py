@@ -7,7 +7,7 @@
 #   acomm fuzz --corpus DIR ...   keep the inputs that reached new lines of
 #                                 acomm and mutate them further, and add this
 #                                 run to DIR's cumulative counts and coverage
-#                                 (acomm_cpython.fuzzcov)
+#                                 (acomm_cpython.bench.fuzzcov)
 # Exit status 1 when anything failed.
 import json
 import tempfile
@@ -72,7 +72,7 @@ def main(args):
         ms = None if args.cases is not None else int(args.seconds * 1000)
         tracer = None
         if args.corpus:
-            from ..fuzzcov import Tracer
+            from ..bench.fuzzcov import Tracer
 
             tracer = Tracer(args.corpus, args.trace_every)
             tracer.load_corpus(targets)

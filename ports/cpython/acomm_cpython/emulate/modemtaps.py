@@ -1,5 +1,5 @@
 # Serial lines between an emulated board and an emulated modem, and what
-# went over them in acomm's terms. CPython only (acomm_cpython.picobuoy).
+# went over them in acomm's terms. CPython only (acomm_cpython.bench.picobuoy).
 #
 #   Bridge(board_tty, modem_tty, tap=None)   a null-modem cable between two
 #       serial devices (pty slaves), copying bytes both ways in a thread;

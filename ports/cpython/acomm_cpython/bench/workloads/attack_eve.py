@@ -10,7 +10,7 @@ from acomm.catalog import teleop
 from acomm.codec.compress import compress
 from acomm.drivers import seatrac_codes as sc
 
-from ..demo.places import ADDR, AUV, BUOY, DIVER
+from ...demo.places import ADDR, AUV, BUOY, DIVER
 
 NAMES = (BUOY, DIVER, AUV)
 EVE = 14  # the attacker's own beacon id

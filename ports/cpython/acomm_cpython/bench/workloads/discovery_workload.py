@@ -8,7 +8,7 @@
 # seconds and in advert periods. Runtime-independent (virtual time), so it
 # runs on CPython only in `acomm bench`, but the script is portable.
 try:
-    from acomm_cpython.workloads.timer import emit_json
+    from acomm_cpython.bench.workloads.timer import emit_json
 except ImportError:  # MicroPython: the runner puts this folder on the path
     from timer import emit_json
 

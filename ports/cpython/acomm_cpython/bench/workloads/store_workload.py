@@ -22,23 +22,15 @@
 #
 # Files go to a fresh folder under /tmp, removed afterwards.
 #
-#   python3 ports/cpython/acomm_cpython/workloads/store_workload.py
-#   MICROPYPATH=.frozen:. micropython ports/cpython/acomm_cpython/workloads/store_workload.py
+#   python3 ports/cpython/acomm_cpython/bench/workloads/store_workload.py
+#   micropython ports/cpython/acomm_cpython/bench/workloads/store_workload.py
 
 import gc
 import os
-import sys
 from binascii import hexlify
 
 try:
-    import acomm  # noqa: F401
-except ImportError:
-    # Run from a checkout: the repository root is four folders up.
-    _parts = __file__.split("/")
-    sys.path.insert(0, "/".join(_parts[:-5]) or ".")
-
-try:
-    from acomm_cpython.workloads.timer import elapsed_us, emit_json, now_us, rate
+    from acomm_cpython.bench.workloads.timer import elapsed_us, emit_json, now_us, rate
 except ImportError:  # run as a script: this folder is on the path
     from timer import elapsed_us, emit_json, now_us, rate
 

@@ -63,7 +63,7 @@ from acomm_sim.channel import Channel
 from acomm_sim.ledger import Ledger
 from acomm_sim.world import World
 
-from ..demo.places import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
+from ...demo.places import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
 from .attack_eve import EVE, NAMES, Forger
 from .soak_workload import payload
 

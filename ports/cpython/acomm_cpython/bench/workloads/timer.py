@@ -1,5 +1,16 @@
-# Wall-clock microseconds on both runtimes, for benchmark workloads only
-# (the core never reads the clock).
+# What the workloads share, on both runtimes: wall-clock microseconds (for
+# benchmark workloads only: the core never reads the clock), rate() and
+# emit_json(). Every portable workload imports this first, so it also puts
+# the checkout's root on the path of a workload run as a script from a
+# checkout (python3 or micropython ports/cpython/acomm_cpython/bench/
+# workloads/NAME.py): five folders above this one.
+import sys
+
+try:
+    import acomm  # noqa: F401
+except ImportError:
+    sys.path.insert(0, "/".join(__file__.split("/")[:-6]) or ".")
+
 try:
     from time import ticks_diff, ticks_us
 

@@ -1,7 +1,7 @@
 # Core throughput figures, portable: runs in-process on CPython and as a
 # script on the MicroPython unix port (or a board: `mpremote run`).
 try:
-    from acomm_cpython.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads.timer import emit_json, rate
 except ImportError:  # MicroPython: the runner puts this folder on the path
     from timer import emit_json, rate
 

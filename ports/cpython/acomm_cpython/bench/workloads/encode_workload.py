@@ -20,8 +20,8 @@
 #                                     rounds interleaved in this process)
 
 try:
-    from acomm_cpython.workloads import compare_speed as cs
-    from acomm_cpython.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads import compare_speed as cs
+    from acomm_cpython.bench.workloads.timer import emit_json, rate
 except ImportError:  # MicroPython: the runner puts this folder on the path
     import compare_speed as cs
     from timer import emit_json, rate
@@ -113,7 +113,7 @@ def run(emit):
         for s in STAGES:
             emit("encode_stage_ns_%s_%s" % (name, s), int(st[s]), "ns")
     try:
-        from acomm_cpython.workloads.encode_peers import peer_ratios
+        from acomm_cpython.bench.workloads.encode_peers import peer_ratios
     except ImportError:  # MicroPython
         return
     for rec in peer_ratios(items(), cs_):

@@ -18,7 +18,7 @@ import tempfile
 import time
 
 from acomm_cpython.board import boardfiles
-from acomm_cpython.workloads.footprint_minute import (BOARD, LOAD_PACKETS, SIM_MS, ProcPipe, SerialPipe, judge, minute,
+from acomm_cpython.bench.workloads.footprint_minute import (BOARD, LOAD_PACKETS, SIM_MS, ProcPipe, SerialPipe, judge, minute,
                                                       result)
 
 
@@ -33,7 +33,7 @@ def stage_flash(tmp):
 
 
 def micropython_unix64():
-    from acomm_cpython.bench import find_micropython
+    from acomm_cpython.bench.runtime import find_micropython
 
     return find_micropython()
 

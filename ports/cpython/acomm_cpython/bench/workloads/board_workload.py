@@ -1,4 +1,4 @@
-# `acomm bench board`: the buoy on its own chip (acomm_cpython.picobuoy):
+# `acomm bench board`: the buoy on its own chip (acomm_cpython.bench.picobuoy):
 # boards/buoy_pico flashed with `acomm flash --reset` onto an emulated
 # Raspberry Pi Pico running MicroPython's own firmware, relaying a diver's
 # report (the diver's tablet program on a second emulated Pico) from an
@@ -37,7 +37,7 @@ PER_RUNTIME = ()
 
 
 def run(emit):
-    from acomm_cpython import picobuoy
+    from acomm_cpython.bench import picobuoy
 
     m = picobuoy.missing()
     if m:

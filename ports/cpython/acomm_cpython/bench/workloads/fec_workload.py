@@ -17,8 +17,8 @@
 #                             each (per runtime)
 
 try:
-    from acomm_cpython.workloads.divelog import divelog
-    from acomm_cpython.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads.divelog import divelog
+    from acomm_cpython.bench.workloads.timer import emit_json, rate
 except ImportError:  # MicroPython: the runner puts this folder on the path
     from divelog import divelog
     from timer import emit_json, rate

@@ -42,9 +42,9 @@
 # minutes each. Without node, rp2040js or the boot ROM they are skipped
 # with a note (named with --only, they fail with it).
 #
-#   python -m acomm_cpython.workloads.footprint_workload --only frozen_cortex_m [-v]
-#   python -m acomm_cpython.workloads.footprint_workload --only frozen_cortex_m --heap 53248 --info
-#   python -m acomm_cpython.workloads.footprint_workload --only frozen_rp2040 --heap 53248   (--heap 0: the whole heap)
+#   python -m acomm_cpython.bench.workloads.footprint_workload --only frozen_cortex_m [-v]
+#   python -m acomm_cpython.bench.workloads.footprint_workload --only frozen_cortex_m --heap 53248 --info
+#   python -m acomm_cpython.bench.workloads.footprint_workload --only frozen_rp2040 --heap 53248   (--heap 0: the whole heap)
 import json
 import os
 import shutil
@@ -52,9 +52,9 @@ import subprocess
 import tempfile
 import time
 
-from acomm_cpython.workloads import footprint_pico as pico
-from acomm_cpython.workloads.footprint_minute import LOAD_PACKETS, seed_store
-from acomm_cpython.workloads.footprint_runners import (Staged, build_romfs, micropython_i386, micropython_unix64, run_i386,
+from acomm_cpython.bench.workloads import footprint_pico as pico
+from acomm_cpython.bench.workloads.footprint_minute import LOAD_PACKETS, seed_store
+from acomm_cpython.bench.workloads.footprint_runners import (Staged, build_romfs, micropython_i386, micropython_unix64, run_i386,
                                                        run_once, run_qemu, stage_flash)
 
 PER_RUNTIME = ()
@@ -277,7 +277,7 @@ def main(argv=None):
     import sys
 
     global VERBOSE
-    p = argparse.ArgumentParser(prog="python -m acomm_cpython.workloads.footprint_workload",
+    p = argparse.ArgumentParser(prog="python -m acomm_cpython.bench.workloads.footprint_workload",
                                 description="the buoy's heap on 32-bit builds (acomm bench footprint)")
     p.add_argument("--only", choices=GROUPS, help="one group of figures")
     p.add_argument("--heap", type=int, help="run ONE minute at this heap (bytes) and print the board's figures")

@@ -28,7 +28,7 @@
 import math
 
 try:
-    from acomm_cpython.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads.timer import emit_json, rate
 except ImportError:  # MicroPython: the runner puts this folder on the path
     from timer import emit_json, rate
 

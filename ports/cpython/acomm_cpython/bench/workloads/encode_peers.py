@@ -4,8 +4,8 @@
 # in an order that rotates every round), but each coder's figure is its
 # fastest round: on a machine shared with other work the median moved by a
 # factor of 3 from run to run, the fastest round by a few per cent.
-from acomm_cpython.workloads import compare_peers as cp
-from acomm_cpython.workloads.compare_workload import ROUNDS, _PeerCoder, time_rounds
+from acomm_cpython.bench.workloads import compare_peers as cp
+from acomm_cpython.bench.workloads.compare_workload import ROUNDS, _PeerCoder, time_rounds
 
 PEERS = ("cbor", "ltcodecs")
 

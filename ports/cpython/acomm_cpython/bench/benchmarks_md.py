@@ -6,8 +6,8 @@
 # timing (bytes, limits, airtime) are what the code gives today.
 import json
 
-from acomm_cpython.workloads import compare_items as ci
-from acomm_cpython.workloads import compare_peers as cp
+from acomm_cpython.bench.workloads import compare_items as ci
+from acomm_cpython.bench.workloads import compare_peers as cp
 
 COMMAND = ".venv/bin/python tools/mkbenchmarks.py"
 BENCH = "acomm bench compare --json"
@@ -175,7 +175,7 @@ def render(records, machine):
     a("Each item encoded once by each system; in brackets, the bytes' bits over the limit (the sum over "
       "fields of log2 of their number of distinct values; for the log, its zlib -9 size). The values are "
       "on acomm's quantization grid, and every peer gets them in the form that costs it least "
-      "(`ports/cpython/acomm_cpython/workloads/compare_peers.py` says how for each).")
+      "(`ports/cpython/acomm_cpython/bench/workloads/compare_peers.py` says how for each).")
     a("")
     L.extend(_bytes_table(f, peers))
     a("")

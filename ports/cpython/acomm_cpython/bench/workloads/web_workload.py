@@ -53,7 +53,7 @@ def run(emit):
     import acomm_web
     from acomm_web import page
 
-    from ..bench import find_micropython
+    from ..runtime import find_micropython
 
     raw, gz = page.sizes()
     emit("web_page_bytes", raw, "B")

@@ -14,7 +14,7 @@
 #   speed       speed_<item>_<peer>: the peer's encode + decode rate over
 #               acomm's, interleaved in this process (median of ROUNDS);
 #               roundtrips_per_s_<item>_{cpython,micropython}: acomm's own
-#   transfer    transfer_*: acomm_cpython.workloads.transfer_workload's lines,
+#   transfer    transfer_*: acomm_cpython.bench.workloads.transfer_workload's lines,
 #               and transfer_arq_over_saw_<modem>_<loss %>
 #   footprint   footprint_*: footprint_workload's lines, passed through
 #
@@ -23,10 +23,10 @@ import sys
 
 from acomm_sim.medium import Medium
 from acomm_sim.packetmodem import PROFILES, PacketModemEmulator
-from acomm_cpython.workloads import compare_items as ci
-from acomm_cpython.workloads import compare_peers as cp
-from acomm_cpython.workloads import compare_speed as cs
-from acomm_cpython.workloads.timer import elapsed_us, now_us
+from acomm_cpython.bench.workloads import compare_items as ci
+from acomm_cpython.bench.workloads import compare_peers as cp
+from acomm_cpython.bench.workloads import compare_speed as cs
+from acomm_cpython.bench.workloads.timer import elapsed_us, now_us
 
 PER_RUNTIME = ()  # acomm's MicroPython figures come from compare_speed (run())
 ACOMM_FORMS = ("acomm_payload", "acomm_elided", "acomm_raw")
@@ -174,18 +174,18 @@ def run(emit, speed=True, slow=True):
 
 
 def _micropython_speed(emit):
-    from acomm_cpython import bench
+    from acomm_cpython.bench.runtime import find_micropython, run_micropython
 
-    mp = bench.find_micropython()
+    mp = find_micropython()
     if mp is None:
         print("note: no micropython command found; MicroPython figures skipped", file=sys.stderr)
         return
-    for rec in bench.run_micropython("compare_speed", mp):
+    for rec in run_micropython("compare_speed", mp):
         emit(rec["name"] + "_micropython", rec["value"], rec["unit"])
 
 
 def _transfer(emit):
-    from acomm_cpython.workloads import transfer_workload
+    from acomm_cpython.bench.workloads import transfer_workload
 
     seen = {}
 
@@ -205,8 +205,8 @@ def _transfer(emit):
 def _simulator(emit):
     # the simulator's speed and scale (sim_workload) and a sweep's speed-up
     # on 2 Dask workers (sweep_workload, when Dask is installed)
-    from acomm_cpython.workloads import sim_workload as sw
-    from acomm_cpython.workloads import sweep_workload
+    from acomm_cpython.bench.workloads import sim_workload as sw
+    from acomm_cpython.bench.workloads import sweep_workload
 
     _, wall, _ = sw.run_once("tdma")
     emit("sim_speedup_16_nodes", round(sw.SIM_S / wall, 1), "x")
@@ -219,6 +219,6 @@ def _simulator(emit):
 
 def _footprint(emit):
     # passed through as it comes: the footprint bench is its owner's to change
-    from acomm_cpython.workloads import footprint_workload
+    from acomm_cpython.bench.workloads import footprint_workload
 
     footprint_workload.run(lambda n, v, u: emit("footprint_" + n, v, u))

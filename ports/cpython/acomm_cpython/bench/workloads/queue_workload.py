@@ -14,21 +14,13 @@
 #                                       requests. 1 is the best possible value.
 #
 # As a script it prints one JSON object per line:
-#   python3 ports/cpython/acomm_cpython/workloads/queue_workload.py
-#   MICROPYPATH=.frozen:. micropython ports/cpython/acomm_cpython/workloads/queue_workload.py
+#   python3 ports/cpython/acomm_cpython/bench/workloads/queue_workload.py
+#   micropython ports/cpython/acomm_cpython/bench/workloads/queue_workload.py
 
 import gc
-import sys
 
 try:
-    import acomm  # noqa: F401
-except ImportError:
-    # Run from a checkout: the repository root is four folders up.
-    _parts = __file__.split("/")
-    sys.path.insert(0, "/".join(_parts[:-5]) or ".")
-
-try:
-    from acomm_cpython.workloads.timer import elapsed_us, emit_json, now_us
+    from acomm_cpython.bench.workloads.timer import elapsed_us, emit_json, now_us
 except ImportError:  # run as a script: this folder is on the path
     from timer import elapsed_us, emit_json, now_us
 

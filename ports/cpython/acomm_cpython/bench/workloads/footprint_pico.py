@@ -48,9 +48,9 @@ import time
 
 from acomm_cpython.board import boardfiles
 from acomm_cpython.board.picoflash import PICO_WALL0, boot_free, flash_image
-from acomm_cpython.workloads.footprint_minute import (BOARD, LOAD_PACKETS, SIM_MS, SerialPipe, judge, minute, result,
+from acomm_cpython.bench.workloads.footprint_minute import (BOARD, LOAD_PACKETS, SIM_MS, SerialPipe, judge, minute, result,
                                                        seed_store)
-from acomm_cpython.workloads.footprint_runners import _read_until, put_files
+from acomm_cpython.bench.workloads.footprint_runners import _read_until, put_files
 
 # A Pico minute takes 1-2.5 minutes of wall time on a quiet machine, and
 # past 10 near the heap's edge (a collection at every few steps) with other

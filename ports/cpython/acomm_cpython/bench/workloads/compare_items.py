@@ -16,7 +16,7 @@
 #              one transport packet: compressed when that helps, fragmented
 
 try:
-    from acomm_cpython.workloads.divelog import divelog
+    from acomm_cpython.bench.workloads.divelog import divelog
 except ImportError:  # MicroPython: the runner puts this folder on the path
     from divelog import divelog
 

@@ -11,8 +11,8 @@
 # one process on CPython.
 
 try:
-    from acomm_cpython.workloads import compare_items as ci
-    from acomm_cpython.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads import compare_items as ci
+    from acomm_cpython.bench.workloads.timer import emit_json, rate
 except ImportError:  # MicroPython: the runner puts this folder on the path
     import compare_items as ci
     from timer import emit_json, rate

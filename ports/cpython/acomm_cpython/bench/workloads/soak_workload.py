@@ -47,7 +47,7 @@ from acomm_sim.ledger import Ledger
 from acomm_sim.soakfaults import Cable, FaultPlan, WallClock, exp_gap
 from acomm_sim.world import MODEMS, World
 
-from ..demo.places import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
+from ...demo.places import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
 
 PER_RUNTIME = ()
 NAMES = (BUOY, DIVER, AUV)

@@ -48,9 +48,9 @@ import tempfile
 import threading
 import time
 
-from .emulate import modemtaps as mt
-from .emulate.capture import read_capture
-from .board.picoboard import PicoBoard, PicoError, firmware, runner_available
+from ..emulate import modemtaps as mt
+from ..emulate.capture import read_capture
+from ..board.picoboard import PicoBoard, PicoError, firmware, runner_available
 
 BUOY, DIVER, SHORE = 1, 2, 3
 READY = {"buoy": b"acomm buoy: node 1", "diver": b"acomm diver: node 2"}
@@ -90,7 +90,7 @@ def _die_with_parent():
 
 def diver_board(boards_dir, period_s):
     """boards/diver_esp32s3 mapped to an RP2040, as boards_dir/diver_pico; returns its checked config."""
-    from .board.boardfiles import board_path, load_config
+    from ..board.boardfiles import board_path, load_config
 
     src = board_path("diver_esp32s3")
     g = {}
@@ -104,7 +104,7 @@ def diver_board(boards_dir, period_s):
     os.makedirs(d, exist_ok=True)
     shutil.copy(os.path.join(src, "main.py"), os.path.join(d, "main.py"))
     with open(os.path.join(d, "config.py"), "w") as f:
-        f.write("# boards/diver_esp32s3 on a Raspberry Pi Pico (acomm_cpython.picobuoy)\nCONFIG = %r\n" % (cfg,))
+        f.write("# boards/diver_esp32s3 on a Raspberry Pi Pico (acomm_cpython.bench.picobuoy)\nCONFIG = %r\n" % (cfg,))
     return load_config(d)
 
 
@@ -271,7 +271,7 @@ class Run:
             c.close()
         self.cons = []
         store_copy = self.path("acomm.store")
-        from .board.flash import mpremote_command
+        from ..board.flash import mpremote_command
 
         cp = subprocess.run(mpremote_command() + ["connect", buoy.usb, "fs", "cp", ":/data/acomm.store", store_copy],
                             stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)

@@ -31,7 +31,7 @@ import zlib
 from acomm.codec.fields import Fixed, Nested, UInt
 from acomm.codec.text6 import Text6
 
-from acomm_cpython.workloads import compare_items as ci
+from acomm_cpython.bench.workloads import compare_items as ci
 
 PEERS = ("imc", "cbor", "ltcodecs")
 MODULES = {"imc": "imcpy", "cbor": "cbor2", "ltcodecs": "ltcodecs"}
