@@ -83,8 +83,8 @@ def test_transfer_with_progress_and_a_catalog_message():
             data = random.Random(1).randbytes(3000)  # incompressible: three fragments at a 1024-byte MTU
             st = await buoy.transfer("diver", data, lifespan_s=20, progress=progress.append)
             assert st.name == "delivered" and st.link is None, st
-            assert progress and progress[-1].count >= 3 and all(p.sent <= p.count for p in progress), progress
-            assert progress[-1].acked == progress[-1].count, progress  # the last call: all acknowledged
+            assert progress and progress[-1].total >= 3 and all(p.sent <= p.total for p in progress), progress
+            assert progress[-1].acked == progress[-1].total, progress  # the last call: all acknowledged
             msg = await packets.get(5)
             assert msg.packet and msg.data == data and msg.link is None
             values = {"heart_rate": 72, "breathing_rate": 14, "body_temp": 36.6}

@@ -21,7 +21,7 @@ import asyncio
 import math
 import os
 import time
-from typing import Any, AsyncIterator, Callable, Dict, Iterable, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, AsyncIterator, Callable, Dict, Iterable, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union, cast
 
 from acomm import events as E
 from acomm.errors import AcommError
@@ -96,7 +96,7 @@ class Progress(NamedTuple):
 
     sent: int
     acked: int
-    count: int
+    total: int
 
 
 class CatalogMessage(NamedTuple):
@@ -267,8 +267,8 @@ class AsyncNode:
             del self._requests[key]
             if key[0] == "packet":
                 fn, last = self._progress.pop(key[2], (None, None))
-                if fn is not None and last is not None and code == E.DELIVERED and last.acked < last.count:
-                    fn(Progress(last.count, last.count, last.count))  # the last SACK ends the transfer
+                if fn is not None and last is not None and code == E.DELIVERED and last.acked < last.total:
+                    fn(Progress(last.total, last.total, last.total))  # the last SACK ends the transfer
 
     def _after_step(self, now: int) -> None:
         if not self._up.is_set():
@@ -472,7 +472,7 @@ class open_node:
                  driver_options: Optional[Mapping[str, Any]] = None, link_options: Optional[Mapping[str, Any]] = None,
                  startup_timeout_s: float = 15.0, udp_peers: Optional[Mapping[int, str]] = None,
                  multicast: bool = True) -> None:
-        self._args = dict(name=name, node_id=node_id, modems=list(modems), udp=udp, tcp_listen=tcp_listen,
+        self._args: Dict[str, Any] = dict(name=name, node_id=node_id, modems=list(modems), udp=udp, tcp_listen=tcp_listen,
                           tcp_connect=tcp_connect, known=dict(known or {}), key_file=key_file, store=store,
                           transport=transport, driver_options=dict(driver_options or {}),
                           link_options=dict(link_options or {}), udp_peers=dict(udp_peers or {}),
@@ -509,6 +509,7 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
         core.names.add(k, int(v))
     closers: List[Any] = []
     ports: Dict[str, Any] = {}
+    port: Any
     watches: List[Tuple[str, Any]] = []
     lopts = dict(link_options or {})
     try:
@@ -544,7 +545,7 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
             _, port = tcp_client_link(core, host, p, lname, **lopts)
             closers.append(port)
             ports[lname] = port
-        t = None
+        t: Optional[HostTransport] = None
         if transport:
             st = None
             if store is not None:
@@ -553,7 +554,7 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
                 os.makedirs(store, exist_ok=True)
                 st = Store(os.path.join(store, "acomm.store"), capacity_bytes=1 << 22, max_record=1024)
                 closers.append(st)
-            t = HostTransport.of(core, store=st)
+            t = cast(HostTransport, HostTransport.of(core, store=st))
     except BaseException:
         for c in closers:
             try:

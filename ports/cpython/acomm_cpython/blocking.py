@@ -15,7 +15,7 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import threading
-from typing import Any, Awaitable, Callable, Dict, Optional, TypeVar
+from typing import Any, Callable, Coroutine, Dict, Optional, TypeVar
 
 from .aio import AsyncNode, CatalogMessage, Message, Progress, Status, build_node
 
@@ -61,7 +61,7 @@ class Node:
     async def _subscribe(self) -> Any:
         return self._node.messages()
 
-    def _call(self, fn: Callable[[], Awaitable[T]], timeout_s: Optional[float] = None) -> T:
+    def _call(self, fn: Callable[[], Coroutine[Any, Any, T]], timeout_s: Optional[float] = None) -> T:
         fut: concurrent.futures.Future[T] = asyncio.run_coroutine_threadsafe(fn(), self._loop)
         try:
             return fut.result(timeout_s)

@@ -239,7 +239,7 @@ class Refused(Event):
         return str(self.raw[E.REFUSED_REASON])
 
 
-_VIEWS: Dict[int, type] = {
+_VIEWS: Dict[int, "type[Event]"] = {
     E.EV_STATUS: LinkStatus,
     E.EV_RECEIVED: Received,
     E.EV_AVAILABILITY: Availability,

@@ -9,7 +9,7 @@
 
 from __future__ import annotations
 
-from typing import Optional, Tuple
+from typing import Any, Optional, Tuple
 
 from acomm.events import CANCELED
 from acomm.transport import Transport
@@ -19,13 +19,14 @@ def cancel(t: Transport, now: int, pid: int, reason: str = "canceled") -> bool:
     """Ends the transport t's own pending packet pid: its fragments leave the link queues, its
     record leaves the store and one final EV_PACKET_STATUS (canceled) follows. False when pid is
     not one of t's own pending packets (already final, or unknown)."""
-    for p in t._out:
+    t_: Any = t  # its private state, read in this module only
+    for p in t_._out:
         if p.pid == pid and not p.relayed:
             for c in list(p.group) if p.group is not None else [p]:
-                t._drop(now, c)
-            t.packets.delete(p)
-            t.stats["canceled"] = t.stats.get("canceled", 0) + 1
-            t._status(p, CANCELED, reason)
+                t_._drop(now, c)
+            t_.packets.delete(p)
+            t_.stats["canceled"] = t_.stats.get("canceled", 0) + 1
+            t_._status(p, CANCELED, reason)
             return True
     return False
 
@@ -35,7 +36,8 @@ def progress(t: Transport, pid: int) -> Optional[Tuple[int, int, int]]:
     packet pid; None before its transfer starts (or once it is final). sent counts the
     acknowledged ones plus those of the current round handed to the link; the receiver's SACKs
     come at the end of each round."""
-    for p in t._out:
+    t_: Any = t
+    for p in t_._out:
         o = p.out
         if p.pid != pid or o is None or p.relayed:
             continue

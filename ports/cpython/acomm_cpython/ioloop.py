@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import asyncio
 import select
-from typing import Any, Callable, Dict, List, Optional, Sequence
+from typing import Any, Callable, Dict, List, Optional, Sequence, Set
 
 BUSY_MS = 10
 PENDING_MS = 100
@@ -70,7 +70,7 @@ class NodeLoop:
         self._held: Dict[int, bool] = {}
         self._timer: Optional[asyncio.TimerHandle] = None
         self._soon = False
-        self._reported: set = set()
+        self._reported: Set[type] = set()
         self._running = False
 
     # -- life -----------------------------------------------------------------------

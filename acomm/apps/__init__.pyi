@@ -1,0 +1,1 @@
+# The applications (acomm/apps): stubs only for what a topside program calls.
