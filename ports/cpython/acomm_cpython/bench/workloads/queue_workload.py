@@ -24,7 +24,6 @@ try:
 except ImportError:  # run as a script: this folder is on the path
     from timer import elapsed_us, emit_json, now_us
 
-from acomm_sim.clock import ManualClock
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.prng import Prng
 from acomm.link.txqueue import PRIO_ALARM, TxQueue, TxRequest
@@ -43,17 +42,16 @@ def bench_queue_ops(n_ops=20000, depth=1000):
     rng = Prng(7)
     prios = [(1, 2, 2, 3, 10, 10, 16, 16)[rng.below(8)] for _ in range(1024)]
     lifes = _table(rng, 1024, 2000, 120000)
-    clk = ManualClock(TICKS_MAX - 30000)  # the run crosses the ticks wrap
+    now = TICKS_MAX - 30000  # virtual time, in ticks; the run crosses the wrap
     q = TxQueue(2 * depth)
     pool = []
     rid = 0
-    now = clk()
     for _ in range(depth + 1):
         q.push(TxRequest(rid & 0xFFFF, 1, prios[rid & 1023], ticks_add(now, lifes[rid & 1023])), now)
         rid += 1
     t0 = now_us()
     for i in range(n_ops):
-        now = clk.advance(5)
+        now = ticks_add(now, 5)
         r = q.pop(now)
         if r is None:
             r = pool.pop() if pool else TxRequest(0, 1, 16, 0)
@@ -81,10 +79,9 @@ def bench_alarm_latency(n_alarms=100, flood=10000, aging_ms=0, prio=PRIO_ALARM):
     # of class `prio`) left the queue, the frame on the air when it arrived
     # included. aging_ms > 0 turns on the queue's fairness aging.
     rng = Prng(11)
-    clk = ManualClock(TICKS_MAX - 100000)
+    now = TICKS_MAX - 100000  # virtual time, in ticks
     q = TxQueue(flood, aging_ms)
     rid = 0
-    now = clk()
     for _ in range(flood):
         q.push(TxRequest(rid & 0xFFFF, 1, rng.range(10, 16), ticks_add(now, 3600000)), now)
         rid += 1
@@ -99,8 +96,7 @@ def bench_alarm_latency(n_alarms=100, flood=10000, aging_ms=0, prio=PRIO_ALARM):
         airtime = rng.range(500, 3000)  # a 16..96 byte frame at 256 bit/s
         if alarm is None and rng.chance(0.3):
             at = rng.below(airtime)
-            clk.advance(at)
-            now = clk()
+            now = ticks_add(now, at)
             alarm = TxRequest(0xFFFF, 0, prio, ticks_add(now, 30000), b"SOS")
             out = q.push(alarm, now)
             if out is alarm:
@@ -108,10 +104,9 @@ def bench_alarm_latency(n_alarms=100, flood=10000, aging_ms=0, prio=PRIO_ALARM):
             if out is not None:
                 spare.append(out)  # a flood request evicted to make room
             count = 1  # the frame already on the air
-            clk.advance(airtime - at)
+            now = ticks_add(now, airtime - at)
         else:
-            clk.advance(airtime)
-        now = clk()
+            now = ticks_add(now, airtime)
         for r in q.expire(now):
             if r is alarm:
                 # never sent: count what went on the air while it waited
