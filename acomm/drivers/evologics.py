@@ -10,13 +10,15 @@
 #   the acoustic slot  one IM, burst or ping from the moment the link hands
 #                      it over until the modem's final notification.
 # Notifications (RECV*, DELIVERED*, FAILED*, SEND*, ...) are told from
-# replies by their keyword, so they may arrive at any time.
+# replies by their keyword, so they may arrive at any time; what each does
+# is in acomm.drivers.evologics_notifications.
 
 from .caps import CAP_ADDRESSING, CAP_BROADCAST, CAP_DELIVERY, CAP_RANGING, CAP_RELIABLE, Capabilities
 from ..compat import ticks_add, ticks_diff
 from ..errors import AcommError, EncodeError
-from ..events import EV_DELIVERED, EV_RX, EV_TX_FAILED
+from ..events import EV_TX_FAILED
 from . import evologics_wire as w
+from .evologics_notifications import notification
 from .evologics_sequences import (C_CTRL, C_PROBE, C_PTIME, C_SEND, CMD, IDLE, K_BURST, K_IM, K_IM_ACK, K_PING,
                                   KIND_NAMES, PTIME, QUEUED, R_BUSY, R_ERROR, R_OK, R_VALUE, AcousticSlot,
                                   EvologicsConfig)
@@ -292,31 +294,7 @@ class EvologicsDriver(AcousticDriver):
 
     def on_line(self, r):
         now = self._now
-        n = r.n
-        if n == 0:
-            return
-        for k in w.RECV:
-            if r.is_word(k):
-                self._recv(now, r, k)
-                return
-        if r.is_word(b"DELIVEREDIM") or r.is_word(b"FAILEDIM") or r.is_word(b"CANCELEDIM"):
-            self._im_outcome(r)
-            return
-        if r.is_word(b"DELIVERED") or r.is_word(b"FAILED"):
-            self._burst_outcome(r)
-            return
-        if r.is_word(b"SENDEND"):
-            self._send_end(r)
-            return
-        if r.is_word(b"USBLLONG") or r.is_word(b"USBLANGLES"):
-            self._usbl(r)
-            return
-        for k in w.NOTES:
-            if r.is_word(k):
-                self.stats["notes"] += 1
-                return
-        if r.starts(b"ERROR EFAULT") or r.starts(b"ERROR OVERLOAD"):
-            self.stats["async_errors"] += 1  # not replies (evins treats them so)
+        if r.n == 0 or notification(self, now, r):
             return
         kind = R_VALUE
         if r.is_word(b"OK") or r.is_word(b"[*]OK"):
@@ -384,98 +362,3 @@ class EvologicsDriver(AcousticDriver):
                 # a restart put back the address saved in the modem
                 self.stats["reboots"] += 1
                 self.lost(now, "modem rebooted")
-
-    # -- notifications -------------------------------------------------------
-    def _recv(self, now, r, k):
-        # RECVIM (in both firmware layouts), RECV, RECVIMS, RECVPBM: EV_RX
-        data = r.data()
-        li = 1
-        f1 = r.field(1)
-        if f1 and f1[0] == 112:  # p<pid>
-            li = 2
-        src = r.int_field(li + 1)
-        dst = r.int_field(li + 2)
-        if data is None or src is None or dst is None or not 0 <= src <= 255 or not 0 <= dst <= 255:
-            self.stats["malformed"] += 1
-            return
-        if k == b"RECVIM":
-            flag = r.field(li + 3)
-            base = li + 4
-            if self._reader.specs is w.RX_SPECS_16:
-                rssi, integ, vel = r.int_field(base + 1), r.int_field(base + 2), r.float_field(base + 4)
-            else:
-                rssi, integ, vel = r.int_field(base + 1), r.int_field(base + 2), r.float_field(base + 3)
-            own = self.config.own_addr
-            if flag == b"ack" and own is not None and dst == own:
-                # our modem acknowledges by itself: it is busy meanwhile
-                self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
-        elif k == b"RECV":
-            rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 7)
-            if dst == self.config.own_addr:
-                # burst data is always acknowledged, by our modem itself
-                self._hold_until = ticks_add(now, self.turnaround_ms + self.airtime_ms(0))
-        elif k == b"RECVIMS":
-            rssi, integ, vel = r.int_field(li + 5), r.int_field(li + 6), r.float_field(li + 7)
-        else:
-            rssi, integ, vel = r.int_field(li + 4), r.int_field(li + 5), r.float_field(li + 6)
-        self.last_rx = {"src": src, "rssi": rssi, "integrity": integ, "velocity": vel}
-        self._events.append((EV_RX, src, dst, data))
-
-    def _usbl(self, r):
-        # USBLLONG / USBLANGLES (units as the modem gives them, unconfirmed)
-        long = r.is_word(b"USBLLONG")
-        names = w.USBL_LONG if long else w.USBL_ANGLES
-        if r.nc != len(names):
-            self.stats["malformed"] += 1
-            return
-        fix = {}
-        for i in range(len(names)):
-            v = r.float_field(i + 1)
-            if v is None:
-                self.stats["malformed"] += 1
-                return
-            fix[names[i]] = v
-        fix["addr"] = int(fix["addr"])
-        if long:
-            self.last_fix = fix
-        else:
-            self.last_angles = fix
-
-    def _im_outcome(self, r):
-        dst = r.int_field(1)
-        slot = self.slot
-        if dst is None or not slot.awaiting((K_IM_ACK, K_PING), dst):
-            self.stats["stale"] += 1
-            return
-        if r.is_word(b"DELIVEREDIM"):
-            if slot.kind == K_IM_ACK and self.ptime_after_ack:
-                self._ptime = True
-            slot.delivered()
-        else:
-            slot.undelivered(r.shown().split(",")[0])
-
-    def _burst_outcome(self, r):
-        dst = r.int_field(2)
-        for b in self.awaiting:
-            if b[1] == dst:
-                # the oldest burst to dst: the modem reports them in order
-                self.awaiting.remove(b)
-                ok = r.is_word(b"DELIVERED")
-                self._events.append((EV_DELIVERED, b[0]) if ok else (EV_TX_FAILED, b[0], "FAILED"))
-                return
-        slot = self.slot
-        if dst is None or not slot.awaiting((K_BURST,), dst):
-            self.stats["stale"] += 1
-            return
-        if r.is_word(b"DELIVERED"):
-            slot.delivered()
-        else:
-            slot.undelivered("FAILED")
-
-    def _send_end(self, r):
-        addr = r.int_field(1)
-        if addr is not None and self.slot.awaiting((K_IM, K_IM_ACK, K_BURST, K_PING), addr):
-            self.slot.send_end()
-        else:
-            self.stats["stale"] += 1
-

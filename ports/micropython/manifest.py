@@ -55,6 +55,7 @@ package(
         "drivers/caps.py",
         "drivers/datagram.py",
         "drivers/evologics.py",
+        "drivers/evologics_notifications.py",
         "drivers/evologics_sequences.py",
         "drivers/evologics_wire.py",
         "drivers/iridium.py",
