@@ -135,24 +135,24 @@ def test_python_blocks_joins_a_pages_python_in_order(tmp_path):
 
 
 @needs_mypy
-@pytest.mark.skip(reason="until quickstart is on the typed API")
-def test_quickstart_typechecks(tmp_path):
-    prog = tmp_path / "quickstart.py"
-    prog.write_text(python_blocks(os.path.join(ROOT, "docs", "quickstart.md")))
-    # The page uses the CPython port too (acomm_cpython), which imports core
-    # modules without stubs (acomm.drivers.*, the other catalogs): errors
-    # inside those .py files are silenced, as mypy does for an installed
-    # package; the page's own lines are checked in full (a call to an
-    # untyped function is still an error there).
-    rc, out, _ = run_mypy(tmp_path, [str(prog)], (ROOT, os.path.join(ROOT, "ports", "cpython"),
-                                                  os.path.join(ROOT, "ports", "sim")),
-                          ["--follow-imports=silent"])
+@pytest.mark.parametrize("page", ["quickstart.md", "quickstart-blocking.md"])
+def test_quickstart_typechecks(tmp_path, page):
+    prog = tmp_path / page.replace("-", "_").replace(".md", ".py")
+    prog.write_text(python_blocks(os.path.join(ROOT, "docs", page)))
+    # In full: the page, and through it the library (acomm_cpython.aio,
+    # blocking, eventview, ioloop, hosttransport: annotated inline) and the
+    # stubs of everything they import (the core's, the port's I/O layer's).
+    rc, out, _ = run_mypy(tmp_path, [str(prog)], (ROOT, os.path.join(ROOT, "ports", "cpython")))
     assert rc == 0, out
+    assert "Success" in out
 
 
 # --- the stubs against the modules ---------------------------------------------
 
 STUBS = sorted(os.path.relpath(p, ROOT) for p in glob.glob(os.path.join(ROOT, "acomm", "**", "*.pyi"), recursive=True))
+# the topside library's stubs (its I/O layer; aio, blocking and the rest carry annotations inline)
+PORT = os.path.join("ports", "cpython") + os.sep
+STUBS += sorted(os.path.relpath(p, ROOT) for p in glob.glob(os.path.join(ROOT, PORT, "acomm_cpython", "*.pyi")))
 # dunder methods a stub must declare when the class defines them (they type
 # len(), `in`, iteration, indexing, with, ==)
 _DUNDERS = {"__init__", "__len__", "__iter__", "__contains__", "__getitem__", "__enter__", "__exit__", "__call__",
@@ -160,6 +160,8 @@ _DUNDERS = {"__init__", "__len__", "__iter__", "__contains__", "__getitem__", "_
 
 
 def _module_of(rel):
+    if rel.startswith(PORT):
+        rel = rel[len(PORT):]
     parts = rel[: -len(".pyi")].split(os.sep)
     if parts[-1] == "__init__":
         parts.pop()
@@ -276,7 +278,8 @@ def _stub_class_members(cls):
     # names the stubs declare for a class and its bases (each in its module's stub)
     names = set()
     for k in cls.__mro__:
-        path = os.path.join(ROOT, *k.__module__.split("."))
+        top = os.path.join(ROOT, PORT) if k.__module__.startswith("acomm_cpython.") else ROOT
+        path = os.path.join(top, *k.__module__.split("."))
         path = os.path.join(path, "__init__.pyi") if os.path.isdir(path) else path + ".pyi"
         if not os.path.isfile(path):
             continue
@@ -362,9 +365,10 @@ def test_the_wheel_ships_the_stubs():
     for_all = data.get("*", []) + data.get("", [])
     packages = set()
     for rel in STUBS:
-        packages.add(".".join(os.path.dirname(rel).split(os.sep)))
+        packages.add(_module_of(os.path.join(os.path.dirname(rel), "__init__.pyi")))
     for pkg in sorted(packages):
         assert "*.pyi" in data.get(pkg, []) + for_all, "setup.cfg [options.package_data] %s: add *.pyi" % pkg
     assert "py.typed" in data.get("acomm", []) + for_all
+    assert "py.typed" in data.get("acomm_cpython", []) + for_all
     listed = [p.strip() for p in cfg["options"]["packages"].split()]
     assert packages <= set(listed), packages - set(listed)
