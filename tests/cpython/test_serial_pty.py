@@ -1,6 +1,7 @@
 # The first real link: two Nodes talk over the transparent serial driver
 # through real pseudo-terminals opened with pyserial, on real time with
-# asyncio (the node clock is acomm.compat.ticks_ms). CPython only.
+# asyncio (the node clock is acomm.compat.ticks_ms), each node stepped by
+# acomm_cpython.ioloop when its pty has bytes and at its deadlines. CPython only.
 #
 # Every wait is bounded; no timing is asserted, only outcomes.
 
@@ -27,7 +28,7 @@ from acomm.events import (  # noqa: E402
 )
 from acomm.link import BROADCAST  # noqa: E402
 from acomm.node import Node  # noqa: E402
-from acomm_cpython.runner import run  # noqa: E402
+from acomm_cpython.ioloop import run  # noqa: E402
 from acomm_cpython.emulate.pty import PtyPair  # noqa: E402
 from acomm_cpython.streams import open_serial  # noqa: E402
 
@@ -83,7 +84,7 @@ def pair(request):
 
 
 def _run(a, b, until):
-    return run([a.node, b.node], TIMEOUT_S, until, period_ms=2)
+    return run([(a.node, [a.stream]), (b.node, [b.stream])], TIMEOUT_S, until)
 
 
 def test_pty_pair_is_a_cable():
@@ -151,7 +152,7 @@ def test_unicast_with_ack_is_delivered_once(pair):
     assert _run(a, b, lambda: a.final(rid) is not None and b.received())
     assert a.final(rid) == DELIVERED
     # run on a little: a second delivery (of a retry, say) would show up now
-    run([a.node, b.node], 0.3)
+    run([(a.node, [a.stream]), (b.node, [b.stream])], 0.3)
     assert b.received() == [("buoy", "diver", b"hello diver")]
 
 

@@ -186,3 +186,33 @@ class NodeLoop:
             if fd not in self._fds and fd not in self._held:
                 loop.add_reader(fd, self._readable, fd)
                 self._fds[fd] = want[fd]
+
+
+async def run_nodes(nodes: Sequence[Any], seconds: Optional[float] = None,
+                    until: Optional[Callable[[], bool]] = None) -> bool:
+    """Runs each (node, ports) pair on its own NodeLoop until until() is true after a step (-> True)
+    or `seconds` pass (-> False); with neither, for ever. For scripts and tests with several
+    nodes in one program (the simulator steps nodes on virtual time instead)."""
+    done = asyncio.Event()
+
+    def check(now: int) -> None:
+        if until is not None and until():
+            done.set()
+
+    loops = [NodeLoop(node, ports) for node, ports in nodes]
+    for nl in loops:
+        nl.after.append(check)
+        nl.start()
+    try:
+        await asyncio.wait_for(done.wait(), seconds)
+        return True
+    except asyncio.TimeoutError:
+        return False
+    finally:
+        for nl in loops:
+            nl.close()
+
+
+def run(nodes: Sequence[Any], seconds: Optional[float] = None, until: Optional[Callable[[], bool]] = None) -> bool:
+    """run_nodes on a fresh event loop, blocking (see run_nodes)."""
+    return asyncio.run(run_nodes(nodes, seconds, until))
