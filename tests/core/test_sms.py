@@ -262,7 +262,7 @@ def test_survives_garbage_damaged_lines_silence_and_restarts():
     assert r.run(30000, until=lambda: a.ready(r.now()))
     # a restart while sending: that message fails, the next one goes
     h = a.send(r.now(), 2, b"three")
-    assert r.run(2000, until=lambda: r.emus[0]._later is not None)
+    assert r.run(2000, until=lambda: r.emus[0].pending_reply)
     r.emus[0].reboot(r.now())
     assert r.run(30000, until=r.got(0, EV_TX_FAILED))
     (ev,) = r.of(0, EV_TX_FAILED)

@@ -96,6 +96,12 @@ class AtModem(SansIO, FaultModes):
             later[1](now)
             self._mute = False
 
+    @property
+    def pending_reply(self):
+        # True while an answer is still to come (an SMS being sent, an SBDIX
+        # session): the modem takes no commands until then. For tests.
+        return self._later is not None
+
     def idle(self, now):
         return self._data is None and self._later is None and self._booting_until is None and not self.net.busy()
 
@@ -186,11 +192,12 @@ class AtModem(SansIO, FaultModes):
     def error(self):
         self.result(b"ERROR", b"4")
 
-    def notify(self, line, code=None):
+    def notify(self, line, code=None, more=False):
         # unsolicited: not while restarting, not muted; a result code
-        # (numeric form `code`) or information text
+        # (numeric form `code`) or information text (more: a further line
+        # of the same, such as the PDU under +CMT)
         if self._booting_until is None:
-            self._emit(line, code or _INFO)
+            self._emit(line, _MORE if more else (code or _INFO))
 
     def prompt(self, text):
         # a data prompt (the SMS "> "): after CR LF in verbose mode

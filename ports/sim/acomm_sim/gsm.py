@@ -4,21 +4,34 @@
 # take_output(). Messages travel through a shared acomm_sim.gsm_net
 # GsmNetwork, addressed by phone number.
 #
-# Commands: AT, ATE0/ATE1, ATV0/ATV1, ATQ0/ATQ1 (chained too), AT&F, ATI,
-# AT+CGMI/+GMI, AT+CGMM/+GMM, AT+CGMR/+GMR, AT+CGSN/+GSN, AT+CMEE=<n>, AT+CPIN?, AT+CSCS=...,
-# AT+CMGF=<0|1>, AT+CMGF?, AT+CNMI=<mode>,<mt>,..., AT+CSQ, AT+CPMS?,
-# AT+CMGS (PDU: =<tpdu length>; text: ="<number>"), AT+CMGR=<i>,
-# AT+CMGL (PDU: =<stat 0..4>; text: ="REC UNREAD"|"REC READ"|"ALL"),
-# AT+CMGD=<i>[,<flag 0..4>]. Anything else: ERROR. Answers are framed as
-# V.250 says for the mode the host set (acomm_sim.atmodem; power-up: echo
-# on, verbose): `CR LF text CR LF`; the +CMGS prompt is CR LF "> " (no line
-# end); the data line of +CMGR / +CMGL follows its header directly.
+# Commands: what a SIM800 or a Quectel EC2x answers at power-up and in SMS
+# work (3GPP TS 27.007 / 27.005), in their formats, so that host software
+# written for those units (python-gsmmodem, Gammu, ModemManager) connects:
+# AT, ATE/ATV/ATQ (chained too), AT&F, ATZ, ATI, AT+CGMI/+GMI, AT+CGMM/+GMM,
+# AT+CGMR/+GMR, AT+CGSN/+GSN, AT+CIMI, AT+GCAP, AT+CLAC, AT+CFUN, AT+CMEE,
+# AT+CPIN, AT+CSQ, AT+CREG, AT+CGREG, AT+COPS, AT+CNUM, AT+CSCA, AT+CSCS,
+# AT+CSMP, AT+CMGF, AT+CNMI, AT+CPMS, AT+CLIP, AT+CRC, AT+CVHU, with their
+# read (?), test (=?) and set (=) forms, and AT+CMGS (PDU: =<tpdu length>;
+# text: ="<number>"), AT+CMGR=<i>, AT+CMGL[=<stat>], AT+CMGD=<i>[,<flag>].
+# An unknown command: ERROR (as both units answer, whatever AT+CMEE says);
+# a bad parameter: ERROR, or +CME ERROR: <n> after AT+CMEE=1 (=2: its
+# text), +CMS ERROR: <n> for the SMS commands. docs/drivers-sms.md has the
+# conformance table. Answers are framed as V.250 says for the mode the host
+# set (acomm_sim.atmodem; power-up: echo on, verbose): `CR LF text CR LF`;
+# the +CMGS prompt is CR LF "> " (no line end); the data line of +CMGR /
+# +CMGL / +CMT follows its header directly.
 #
 # Power-up state: echo on, PDU mode, no new-message indications until
-# AT+CNMI (mt=1: "+CMTI: "SM",<i>" when a message is stored). The message
-# storage is the SIM's and survives a restart. A stored message shows in
-# PDU mode as an SMS-DELIVER, in text mode as its text (8-bit data as hex,
-# as real modems do). Sending takes send_ms.
+# AT+CNMI (mt=1 or 3: "+CMTI: "SM",<i>" when a message is stored; mt=2: the
+# message itself as +CMT, not stored; mode 0: nothing shown), registration
+# reports off (AT+CREG=1/2: "+CREG: <stat>[,<lac>,<ci>]" when the
+# registration changes: set_rssi to or from 0/99, AT+CFUN). The message
+# storage and the SMSC number are the SIM's and survive a restart. A stored
+# message shows in PDU mode as an SMS-DELIVER, in text mode as its text
+# (8-bit data as hex, as real modems do). Sending takes send_ms. After a
+# restart the unit prints `banner`, or with power_up="sim800" / "ec2x" (or
+# ((ms, line), ...)) the lines those units print as they come up (RDY,
+# +CFUN: 1, +CPIN: READY, Call Ready, SMS Ready ...), spread over seconds.
 #
 # Fault modes: set_rssi(n) (0 or 99: no network, +CMS ERROR: 331),
 # fail_sends(code, count) (+CMS ERROR: <code>), a full storage (`storage`
@@ -26,12 +39,32 @@
 # corrupt_next / truncate_next(b"+CMTI") etc., swallow_next(b"AT+CMGS"),
 # noise, reboot(now).
 
+from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers import sms_pdu as pdu
 
 from .atmodem import AtModem
 from .gsm_net import network_of
 
 _STAT_TEXT = (b"REC UNREAD", b"REC READ", b"STO UNSENT", b"STO SENT")
+_CHARSETS = (b"IRA", b"GSM", b"UCS2", b"HEX")
+# AT+CLAC: the commands answered here, one a line without "AT", as SIM800
+# and EC2x list theirs
+_CLAC = (b"&F", b"E", b"I", b"Q", b"V", b"Z", b"+CFUN", b"+CGMI", b"+CGMM", b"+CGMR", b"+CGREG", b"+CGSN", b"+CIMI",
+         b"+CLAC", b"+CLIP", b"+CMEE", b"+CMGD", b"+CMGF", b"+CMGL", b"+CMGR", b"+CMGS", b"+CNMI", b"+CNUM", b"+COPS",
+         b"+CPIN", b"+CPMS", b"+CRC", b"+CREG", b"+CSCA", b"+CSCS", b"+CSMP", b"+CSQ", b"+CVHU", b"+GCAP", b"+GMI",
+         b"+GMM", b"+GMR", b"+GSN")
+# settings of one number: name -> highest value (the attribute is the name
+# in lower case without "+")
+_SETTINGS = {b"+CMEE": 2, b"+CREG": 2, b"+CGREG": 2, b"+CLIP": 1, b"+CRC": 1, b"+CVHU": 1, b"+CMGF": 1}
+# what a unit prints as it comes up, (ms after the restart, line): SIM800
+# at a fixed baud rate (SIM800 AT manual V1.09 19.3: RDY, +CPIN, Call Ready,
+# SMS Ready) and Quectel EC2x
+POWER_UP = {
+    "sim800": ((0, b"RDY"), (200, b"+CFUN: 1"), (400, b"+CPIN: READY"), (3000, b"Call Ready"), (3500, b"SMS Ready")),
+    "ec2x": ((0, b"RDY"), (200, b"+CFUN: 1"), (400, b"+CPIN: READY"), (500, b"+QUSIM: 1"), (3000, b"+QIND: SMS DONE"),
+             (3500, b"+QIND: PB DONE")),
+}
+_CME_TEXT = {3: b"operation not allowed", 4: b"operation not supported", 50: b"Incorrect parameters"}
 
 
 def default_number(address):
@@ -55,8 +88,10 @@ def _bcd2(v):
 
 class GsmEmulator(AtModem):
     def __init__(self, medium, address=1, now=0, number=None, rssi=20, storage=20, send_ms=2000,
-                 data_timeout_ms=60000, boot_ms=2000, banner=(b"RDY",)):
+                 data_timeout_ms=60000, boot_ms=2000, banner=(b"RDY",), power_up=None):
         AtModem.__init__(self, now, banner, boot_ms)
+        self.power_up = POWER_UP[power_up] if isinstance(power_up, str) else power_up
+        self._urc_q = []  # [when, line]: power-up lines still to come
         self.net = network_of(medium)
         self.address = address
         self.number = number or default_number(address)
@@ -67,18 +102,66 @@ class GsmEmulator(AtModem):
         self.store_ = {}  # index -> [stat, number, dcs, data, (day, secs)]
         self.sent = []  # (number, dcs, data), for tests
         self.mr = 0
+        self.smsc = self.net.smsc  # the SIM's
         self._fails = []
         self._reset()
         self.net.attach(self)
 
     def _reset(self):
+        # the power-up settings (27.007 / 27.005 defaults)
         self.cmgf = 0
-        self.cnmi_mt = 0
+        self.cnmi = [0, 0, 0, 0, 0]
         self.cmee = 0
+        self.cfun = 1
+        self.creg = 0
+        self.cgreg = 0
+        self.clip = 0
+        self.crc = 0
+        self.cvhu = 0
+        self.cscs = b"IRA"
+        self.cops_format = 0
+        self.csmp = [17, 167, 0, 0]
+
+    def poll(self, now):
+        AtModem.poll(self, now)
+        q = self._urc_q
+        while q and self._booting_until is None and ticks_diff(now, q[0][0]) >= 0:
+            self.notify(q.pop(0)[1])
+
+    def _booted(self, now):
+        if self.power_up is None:
+            AtModem._booted(self, now)
+        else:
+            self._urc_q = [[ticks_add(now, ms), line] for ms, line in self.power_up]
+            self.poll(now)
+
+    # -- registration ---------------------------------------------------------------------------
+    def reg_stat(self):
+        # 27.007 <stat>: 1 registered (home network), 2 searching (rssi 0
+        # or 99: no network here), 0 not searching (radio off, AT+CFUN=0/4)
+        if self.cfun != 1:
+            return 0
+        return 2 if self.rssi in (0, 99) else 1
+
+    def _reg(self, n, stat):
+        # "<stat>" or, with n=2 and registered, "<stat>,"<lac>","<ci>""
+        if n == 2 and stat == 1:
+            return b'%d,"%04X","%04X"' % (stat, 1, self.address & 0xFFFF)
+        return b"%d" % stat
+
+    def _reg_moved(self, before):
+        # +CREG / +CGREG reports, where turned on, when the registration changed
+        stat = self.reg_stat()
+        if stat != before:
+            for name, n in ((b"+CREG", self.creg), (b"+CGREG", self.cgreg)):
+                if n:
+                    self.notify(name + b": " + self._reg(n, stat))
 
     # -- faults -------------------------------------------------------------------------------
     def set_rssi(self, rssi):
+        before = self.reg_stat()
         self.rssi = rssi
+        self._reg_moved(before)
 
     def fail_sends(self, code, count=1):
         self._fails.extend([code] * count)
@@ -92,79 +175,292 @@ class GsmEmulator(AtModem):
         # a message arrives; False when it cannot be taken now
         if self._booting_until is not None:
             return False
+        secs = (now // 1000) & 0x3FFFFFFF
+        t = (1 + (secs // 86400) % 28, secs % 86400)
+        mode, mt = self.cnmi[0], self.cnmi[1]
+        if mode and mt == 2:
+            # routed to the host at once, not stored (27.005 3.4.1; with
+            # AT+CSMS=0 no acknowledgement is wanted)
+            a, body = self._parts(number, dcs, data, t)
+            self.notify(b"+CMT: ,%s" % a if self.cmgf == 0 else b'+CMT: "%s",,%s' % (number.encode(), a))
+            self.notify(body, more=True)
+            return True
         for i in range(1, self.capacity + 1):
             if i not in self.store_:
-                secs = (now // 1000) & 0x3FFFFFFF
-                self.store_[i] = [0, number, dcs, data, (1 + (secs // 86400) % 28, secs % 86400)]
-                if self.cnmi_mt == 1:
+                self.store_[i] = [0, number, dcs, data, t]
+                if mode and mt in (1, 3):
                     self.notify(b'+CMTI: "SM",%d' % i)
                 return True
         return False
 
     # -- commands --------------------------------------------------------------------------------
+    def _ident(self, name):
+        # the identification commands' text, or None
+        if name in (b"+CGMI", b"+GMI"):
+            return b"acomm"
+        if name in (b"+CGMM", b"+GMM"):
+            return b"GSM modem emulator"
+        if name in (b"+CGMR", b"+GMR"):
+            return b"Revision: acomm-sim 1"
+        if name in (b"+CGSN", b"+GSN"):
+            return b"35%013d" % self.address
+        if name == b"+CIMI":
+            return b"00101%010d" % self.address  # MCC 001 MNC 01: the test network
+        if name == b"+GCAP":
+            return b"+GCAP: +CGSM"
+        return None
+
     def _command(self, now, text, c):
-        if c.startswith(b"I"):
-            self.reply(b"acomm GSM modem emulator")
+        name, op, arg = _split(c)
+        if name[:1] != b"+":
+            if c in (b"I", b"I0"):
+                self.reply(b"acomm GSM modem emulator")
+                self.ok()
+            elif c in (b"&F", b"&F0", b"Z", b"Z0"):
+                # no stored profile: ATZ gives the factory settings too
+                self.echo = True
+                self.verbose = True
+                self.quiet = False
+                self._reset()
+                self.ok()
+            else:
+                self.error()
+            return
+        if op in (b"?", b"=?") and arg:
+            self.error()
+            return
+        t = self._ident(name)
+        if t is not None or name == b"+CLAC":
+            if op == b"":
+                for i, line in enumerate((t,) if t is not None else _CLAC):
+                    self.reply(line, i > 0)
+            elif op != b"=?":
+                self.error()
+                return
             self.ok()
-        elif c in (b"+CGSN", b"+GSN"):
-            self.reply(b"35%013d" % self.address)
+        elif name in _SETTINGS:
+            self._setting(name, op, arg)
+        elif name in (b"+CMGS", b"+CMGR", b"+CMGL", b"+CMGD"):
+            self._sms_command(now, text, name, op, arg)
+        else:
+            f = _OTHERS.get(name)
+            if f is None:
+                self.error()
+            else:
+                f(self, now, op, arg)
+
+    def _setting(self, name, op, arg):
+        attr = name[1:].decode().lower()
+        if op == b"=":
+            v = _nums(arg, 1, 1)
+            if v is None or v[0] > _SETTINGS[name]:
+                self.cme(50)
+                return
+            setattr(self, attr, v[0])
+        elif op == b"?":
+            n = getattr(self, attr)
+            if name in (b"+CREG", b"+CGREG"):
+                self.reply(name + b": %d," % n + self._reg(n, self.reg_stat()))
+            elif name == b"+CLIP":
+                self.reply(b"+CLIP: %d,1" % n)  # 1: CLIP provisioned
+            else:
+                self.reply(name + b": %d" % n)
+        elif op == b"=?":
+            self.reply(name + (b": (0-2)" if _SETTINGS[name] == 2 else b": (0,1)"))
+        else:
+            self.error()
+            return
+        self.ok()
+
+    def _cfun(self, now, op, arg):
+        if op == b"?":
+            self.reply(b"+CFUN: %d" % self.cfun)
+        elif op == b"=?":
+            self.reply(b"+CFUN: (0,1,4),(0,1)")
+        elif op == b"=":
+            v = _nums(arg, 1, 2)
+            if v is None or v[0] not in (0, 1, 4) or (len(v) == 2 and v[1] > 1):
+                self.cme(50)
+                return
+            before = self.reg_stat()
+            self.cfun = v[0]
             self.ok()
-        elif c in (b"+CGMI", b"+GMI"):
-            self.reply(b"acomm")
-            self.ok()
-        elif c in (b"+CGMM", b"+GMM"):
-            self.reply(b"GSM modem emulator")
-            self.ok()
-        elif c in (b"+CGMR", b"+GMR"):
-            self.reply(b"Revision: acomm-sim 1")
-            self.ok()
-        elif c in (b"&F", b"&F0"):
-            self.echo = True
-            self.verbose = True
-            self.quiet = False
-            self._reset()
-            self.ok()
-        elif c.startswith(b"+CMEE="):
-            self.cmee = 1
-            self.ok()
-        elif c == b"+CPIN?":
+            if len(v) == 2 and v[1] == 1:
+                self.reboot(now)  # <rst> 1: a restart after OK
+            else:
+                self._reg_moved(before)
+            return
+        else:
+            self.error()
+            return
+        self.ok()
+
+    def _cpin(self, now, op, arg):
+        if op == b"?":
             self.reply(b"+CPIN: READY")
-            self.ok()
-        elif c.startswith(b"+CSCS="):
-            self.ok()
-        elif c in (b"+CMGF=0", b"+CMGF=1"):
-            self.cmgf = c[-1] - 48
-            self.ok()
-        elif c == b"+CMGF?":
-            self.reply(b"+CMGF: %d" % self.cmgf)
-            self.ok()
-        elif c.startswith(b"+CNMI="):
-            f = c[6:].split(b",")
-            self.cnmi_mt = int(f[1]) if len(f) > 1 and f[1].isdigit() else 0
-            self.ok()
-        elif c == b"+CSQ":
-            self.reply(b"+CSQ: %d,99" % self.rssi)
-            self.ok()
-        elif c == b"+CPMS?":
-            n = len(self.store_)
+        elif op == b"=":
+            self.cme(3)  # no PIN is asked for
+            return
+        elif op != b"=?":
+            self.error()
+            return
+        self.ok()
+
+    def _csq(self, now, op, arg):
+        if op == b"":
+            self.reply(b"+CSQ: %d,99" % (self.rssi if self.cfun == 1 else 99))
+        elif op == b"=?":
+            self.reply(b"+CSQ: (0-31,99),(0-7,99)")
+        else:
+            self.error()
+            return
+        self.ok()
+
+    def _cops(self, now, op, arg):
+        names = self.net.operator  # long, short, numeric
+        if op == b"?":
+            if self.reg_stat() == 1:
+                self.reply(b'+COPS: 0,%d,"%s"' % (self.cops_format, names[self.cops_format]))
+            else:
+                self.reply(b"+COPS: 0")
+        elif op == b"=?":
+            self.reply(b'+COPS: (2,"%s","%s","%s"),,(0-4),(0-2)' % names)
+        elif op == b"=":
+            # 0: automatic (optionally with the format), 3: set the format;
+            # manual selection and deregistration are not modelled
+            f = arg.split(b",")
+            mode = _nums(f[0], 1, 1)
+            if mode is not None and mode[0] in (1, 2, 4):
+                self.cme(3)
+                return
+            v = _nums(arg, 1, 2)
+            if v is None or v[0] not in (0, 3) or (v[0] == 3 and len(v) < 2) or (len(v) == 2 and v[1] > 2):
+                self.cme(50)
+                return
+            if len(v) == 2:
+                self.cops_format = v[1]
+        else:
+            self.error()
+            return
+        self.ok()
+
+    def _cnum(self, now, op, arg):
+        if op == b"":
+            self.reply(b'+CNUM: "","%s",%d' % (self.number.encode(), _toa(self.number)))
+        elif op != b"=?":
+            self.error()
+            return
+        self.ok()
+
+    def _csca(self, now, op, arg):
+        if op == b"?":
+            self.reply(b'+CSCA: "%s",%d' % (self.smsc.encode(), _toa(self.smsc)))
+        elif op == b"=":
+            q = arg.split(b'"')
+            if len(q) < 3 or not q[1].lstrip(b"+").isdigit():
+                self.cms(304 if self.cmgf == 0 else 305)
+                return
+            self.smsc = q[1].decode()
+        elif op != b"=?":
+            self.error()
+            return
+        self.ok()
+
+    def _cscs(self, now, op, arg):
+        if op == b"?":
+            self.reply(b'+CSCS: "%s"' % self.cscs)
+        elif op == b"=?":
+            self.reply(b'+CSCS: ("' + b'","'.join(_CHARSETS) + b'")')
+        elif op == b"=":
+            q = arg.strip(b'"')
+            if q not in _CHARSETS:
+                self.cme(50)
+                return
+            self.cscs = q
+        else:
+            self.error()
+            return
+        self.ok()
+
+    def _csmp(self, now, op, arg):
+        if op == b"?":
+            self.reply(b"+CSMP: %d,%d,%d,%d" % tuple(self.csmp))
+        elif op == b"=":
+            v = _nums(arg, 1, 4)
+            if v is None or max(v) > 255:
+                self.cms(305)
+                return
+            self.csmp[: len(v)] = v
+        elif op != b"=?":
+            self.error()
+            return
+        self.ok()
+
+    def _cnmi(self, now, op, arg):
+        if op == b"?":
+            self.reply(b"+CNMI: %d,%d,%d,%d,%d" % tuple(self.cnmi))
+        elif op == b"=?":
+            self.reply(b"+CNMI: (0-3),(0-3),(0,2),(0-2),(0,1)")
+        elif op == b"=":
+            v = _nums(arg, 1, 5)
+            if v is None or [1 for x, top in zip(v, (3, 3, 2, 2, 1)) if x > top] or (len(v) > 2 and v[2] == 1):
+                self.cms(303)
+                return
+            self.cnmi[: len(v)] = v
+        else:
+            self.error()
+            return
+        self.ok()
+
+    def _cpms(self, now, op, arg):
+        n = len(self.store_)
+        if op == b"?":
             self.reply(b'+CPMS: "SM",%d,%d,"SM",%d,%d,"SM",%d,%d' % ((n, self.capacity) * 3))
+        elif op == b"=?":
+            self.reply(b'+CPMS: ("SM"),("SM"),("SM")')
+        elif op == b"=":
+            # only the SIM's storage here; a real unit has "ME" etc. too
+            f = arg.split(b",")
+            if len(f) > 3 or [1 for m in f if m.strip() != b'"SM"']:
+                self.cms(302)
+                return
+            self.reply(b"+CPMS: %d,%d,%d,%d,%d,%d" % ((n, self.capacity) * 3))
+        else:
+            self.error()
+            return
+        self.ok()
+
+    def _sms_command(self, now, text, name, op, arg):
+        if op == b"=?":
+            if name == b"+CMGD":
+                self.reply(b"+CMGD: (1-%d),(0-4)" % self.capacity)
+            elif name == b"+CMGL":
+                self.reply(b"+CMGL: (0-4)" if self.cmgf == 0 else b'+CMGL: ("' + b'","'.join(_STAT_TEXT) + b'","ALL")')
             self.ok()
-        elif c.startswith(b"+CMGS="):
+        elif name == b"+CMGL" and op in (b"", b"="):
+            self._cmgl(arg if op else None)
+        elif op != b"=":
+            self.error()
+        elif name == b"+CMGS":
             self._cmgs(now, text[8:])
-        elif c.startswith(b"+CMGR="):
-            i = c[6:]
-            e = self.store_.get(int(i)) if i.isdigit() else None
+        elif name == b"+CMGR":
+            e = self.store_.get(int(arg)) if arg.isdigit() else None
             if e is None:
                 self.cms(321)
                 return
             self._show(b"+CMGR: ", None, e)
             self.ok()
-        elif c.startswith(b"+CMGL"):
-            self._cmgl(c[5:])
-        elif c.startswith(b"+CMGD="):
-            self._cmgd(c[6:])
         else:
+            self._cmgd(arg)
+
+    def cme(self, code):
+        # an error of the ME: +CME ERROR as AT+CMEE says (0: ERROR)
+        if self.cmee == 0:
             self.error()
+        elif self.cmee == 1:
+            self.reply(b"+CME ERROR: %d" % code)
+        else:
+            self.reply(b"+CME ERROR: " + _CME_TEXT.get(code, b"unknown"))
 
     def cms(self, code):
         self.reply(b"+CMS ERROR: %d" % code)
@@ -210,7 +506,7 @@ class GsmEmulator(AtModem):
         if self._fails:
             self.cms(self._fails.pop(0))
             return
-        if self.rssi == 0 or self.rssi == 99:
+        if self.reg_stat() != 1:
             self.cms(331)  # no network service
             return
         self.net.submit(now, self.number, dest, dcs, ud)
@@ -226,27 +522,35 @@ class GsmEmulator(AtModem):
         # line (27.005 3.4.2/3.4.3: header CR LF data); so does the next
         # +CMGL entry (more=True)
         stat, number, dcs, data, t = e
+        a, body = self._parts(number, dcs, data, t)
+        lead = b"%d," % index if index is not None else b""
+        if self.cmgf == 0:
+            self.reply(head + lead + b"%d,,%s" % (stat, a), more)
+        else:
+            self.reply(head + lead + b'"%s","%s",,%s' % (_STAT_TEXT[stat], number.encode(), a), more)
+        self.reply(body, True)
+        if stat == 0:
+            e[0] = 1
+
+    def _parts(self, number, dcs, data, t):
+        # a received message as the host sees it: PDU mode (its TPDU
+        # length, the SMS-DELIVER in hex); text mode (its time stamp,
+        # quoted, and the text, 8-bit data as hex)
         day, secs = t
         if self.cmgf == 0:
             scts = bytes((0x42, 0x50, _bcd2(day), _bcd2(secs // 3600), _bcd2(secs // 60 % 60), _bcd2(secs % 60), 0))
             p = pdu.encode_deliver(number, data, dcs, scts)
-            lead = b"%d," % index if index is not None else b""
-            self.reply(head + lead + b"%d,,%d" % (stat, len(p) - 1 - p[0]), more)
-            self.reply(pdu.to_hex(p), True)
-        else:
-            ts = b"24/05/%02d,%02d:%02d:%02d+00" % (day, secs // 3600, secs // 60 % 60, secs % 60)
-            lead = b"%d," % index if index is not None else b""
-            self.reply(head + lead + b'"%s","%s",,"%s"' % (_STAT_TEXT[stat], number.encode(), ts), more)
-            self.reply(data if pdu.alphabet(dcs) == 0 else pdu.to_hex(data), True)
-        if stat == 0:
-            e[0] = 1
+            return b"%d" % (len(p) - 1 - p[0]), pdu.to_hex(p)
+        ts = b'"24/05/%02d,%02d:%02d:%02d+00"' % (day, secs // 3600, secs // 60 % 60, secs % 60)
+        return ts, data if pdu.alphabet(dcs) == 0 else pdu.to_hex(data)
 
     def _cmgl(self, arg):
+        # arg: the <stat> (None: 27.005's default, received unread)
         if self.cmgf == 0:
-            want = int(arg[1:]) if arg[:1] == b"=" and arg[1:].isdigit() else 4
+            want = 0 if arg is None else (int(arg) if arg.isdigit() else -1)
         else:
-            q = arg.split(b'"')
-            name = q[1] if len(q) > 2 else b"ALL"
+            q = arg.split(b'"') if arg is not None else (b"", b"REC UNREAD", b"")
+            name = q[1] if len(q) > 2 else b""
             want = 4 if name == b"ALL" else (_STAT_TEXT.index(name) if name in _STAT_TEXT else -1)
         if not 0 <= want <= 4:
             self.cms(302)
@@ -273,3 +577,40 @@ class GsmEmulator(AtModem):
             for i in [k for k in self.store_ if self.store_[k][0] in drop]:
                 del self.store_[i]
         self.ok()
+
+
+_OTHERS = {b"+CFUN": GsmEmulator._cfun, b"+CPIN": GsmEmulator._cpin, b"+CSQ": GsmEmulator._csq,
+           b"+COPS": GsmEmulator._cops, b"+CNUM": GsmEmulator._cnum, b"+CSCA": GsmEmulator._csca,
+           b"+CSCS": GsmEmulator._cscs, b"+CSMP": GsmEmulator._csmp, b"+CNMI": GsmEmulator._cnmi,
+           b"+CPMS": GsmEmulator._cpms}
+
+
+def _split(c):
+    # b"+CREG=1" -> (b"+CREG", b"=", b"1"); b"+CREG?" -> (.., b"?", b"");
+    # b"+CREG=?" -> (.., b"=?", b""); b"+CSQ" -> (b"+CSQ", b"", b"")
+    i = 0
+    while i < len(c) and c[i] != 61 and c[i] != 63:
+        i += 1
+    rest = c[i:]
+    if rest[:2] == b"=?":
+        return c[:i], b"=?", rest[2:]
+    return c[:i], rest[:1], rest[1:]
+
+
+def _nums(arg, lo, hi):
+    # b"2,1,0,0,0" -> [2, 1, 0, 0, 0]; None unless lo..hi decimal fields
+    f = arg.split(b",")
+    if not lo <= len(f) <= hi:
+        return None
+    out = []
+    for x in f:
+        x = x.strip()
+        if not x.isdigit() or len(x) > 5:
+            return None
+        out.append(int(x))
+    return out
+
+
+def _toa(number):
+    # type of address: 145 international ("+"), 129 national
+    return 145 if number.startswith("+") else 129

@@ -8,6 +8,9 @@
 # other submitted message; queue_sms() puts a message on its way to a modem
 # from outside (a test, `acomm emulate gsm --mt`).
 #
+# The network's operator (AT+COPS: long, short and numeric names; MCC 001
+# MNC 01 is the test network) and the SMSC number its SIMs hold (AT+CSCA).
+#
 # network_of(medium) finds the network of a medium (a GsmNetwork itself,
 # or one made once and kept on any other object, such as the acoustic
 # medium of a World or of `acomm emulate`).
@@ -24,7 +27,10 @@ def digits(number):
 
 
 class GsmNetwork:
-    def __init__(self, delay_ms=3000, retry_ms=10000, max_tries=30):
+    def __init__(self, delay_ms=3000, retry_ms=10000, max_tries=30, operator=(b"ACOMM SIM", b"ACOMM", b"00101"),
+                 smsc="+10000000001"):
+        self.operator = operator
+        self.smsc = smsc
         self.delay_ms = delay_ms
         self.retry_ms = retry_ms
         self.max_tries = max_tries
