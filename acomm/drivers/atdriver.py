@@ -233,6 +233,16 @@ class AtDriver(SlotDriver):
         self._block(self._now, tag, buf, n)
 
     def on_urc(self, line):
+        # an unsolicited line, even in the middle of a command: never its
+        # answer, except where it is what the start-up step asks for (the
+        # SMS driver's "+CPIN: READY" to AT+CPIN?); a banner mark is a restart
+        if self._banner(line):
+            return
+        if self.at.tag == _T_CONFIG:
+            want = self.steps[self._step][1]
+            if want is not None and line.startswith(want):
+                self._step_seen = True
+                return
         if self._state == _S_UP:
             self._urc(self._now, line)
 

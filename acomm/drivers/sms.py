@@ -20,6 +20,14 @@
 # and found by listing the storage (AT+CMGL) at start and every
 # list_period_ms; each is read (AT+CMGR), handed up, and deleted (AT+CMGD).
 # While the signal is 0 or unknown (99) nothing is sent (AtDriver).
+#
+# Unsolicited lines a SIM800 or an EC2x prints at any time (their power-up
+# lines, registration reports, calls) are URCs: never taken for the answer
+# to a command. "RDY" (banner_marks) is a restart: configure again; the
+# other power-up lines (+CFUN: 1, +CPIN: READY, Call Ready, SMS Ready,
+# +QIND, +QUSIM) follow it and are counted only. "+CPIN: <not READY>" (SIM
+# removed or failed) configures the modem again once the line is free, so
+# that the driver is down until AT+CPIN? says READY.
 
 from .caps import CAP_ADDRESSING, Capabilities
 from ..compat import const, ticks_add, ticks_diff
@@ -27,7 +35,7 @@ from ..errors import AcommError, DecodeError, EncodeError
 from ..events import EV_RX, EV_TX_DONE, EV_TX_FAILED
 from . import sms_pdu as pdu
 from . import sms_wire as w
-from .atcommand import R_OK, R_TIMEOUT
+from .atcommand import R_OK, R_TIMEOUT, after
 from .atdriver import AtDriver
 from .base import IDLE, QUEUED
 
@@ -74,7 +82,7 @@ class SmsDriver(AtDriver):
         retry_ms=5000,
         down_after=3,
         read_capacity=16,
-        banner_marks=(b"RDY", b"+CFUN:", b"SMS Ready", b"Call Ready"),
+        banner_marks=(b"RDY",),
     ):
         steps = [(b"ATE0Q0V1", None, None), (b"AT+CMEE=1", None, None),
                  (b"AT+CPIN?", b"+CPIN: READY", None), (b"AT+CMGF=%d" % (0 if pdu_mode else 1), None, None)]
@@ -84,7 +92,8 @@ class SmsDriver(AtDriver):
             steps.append((b"AT+CNMI=2,1,0,0,0", None, None))
         steps.append((b"AT+CSQ", b"+CSQ", csq_timeout_ms))
         mtu = pdu.UD_MAX if pdu_mode else w.TEXT_MTU
-        urcs = (b"+CMTI:", b"+CDSI:", b"+CIEV:", b"+CREG:", b"RING", b"NO CARRIER")
+        urcs = (b"+CMTI:", b"+CDSI:", b"+CIEV:", b"+CREG:", b"+CGREG:", b"+CPIN:", b"+CFUN:", b"Call Ready",
+                b"SMS Ready", b"+QIND:", b"+QUSIM:", b"RING", b"+CRING:", b"+CLIP:", b"NO CARRIER")
         AtDriver.__init__(self, steps, urcs, mtu, 400, 0, cmd_timeout_ms, retry_ms, down_after, csq_period_ms,
                           csq_retry_ms, csq_timeout_ms, banner_marks)
         self.address = address  # our own node id: the destination of what arrives
@@ -117,7 +126,7 @@ class SmsDriver(AtDriver):
         self.last_error = None
         self.stats.update({
             "sent": 0, "send_failed": 0, "received": 0, "rx_bad": 0, "rx_unknown_sender": 0, "rx_not_binary": 0,
-            "read_overflow": 0, "deleted": 0, "malformed": 0, "urcs_other": 0,
+            "read_overflow": 0, "deleted": 0, "malformed": 0, "urcs_other": 0, "sim_lost": 0,
         })
         self._read = []  # storage indices to read, oldest first
         self._delete = []  # indices read, to delete
@@ -128,6 +137,7 @@ class SmsDriver(AtDriver):
         self._mr = None
         self._hdr = None
         self._body = None
+        self._sim = None  # why to configure again ("+CPIN: NOT READY"), once the line is free
 
     def set_number(self, node_id, number):
         if not isinstance(number, str) or not number.lstrip("+").isdigit():
@@ -171,6 +181,10 @@ class SmsDriver(AtDriver):
     def _work(self, now):
         at = self.at
         s = self.slot
+        if self._sim is not None:
+            self.lost(now, self._sim)
+            self._pump(now)  # the start-up's first command
+            return True
         if self._delete:
             at.command(now, b"AT+CMGD=%d" % self._delete[0], T_CMGD, self.cmd_timeout_ms)
             return True
@@ -336,6 +350,9 @@ class SmsDriver(AtDriver):
                 self.stats["malformed"] += 1
             else:
                 self._want(i)
+        elif line.startswith(b"+CPIN:") and after(line, b"+CPIN:") != b"READY":
+            self.stats["sim_lost"] += 1
+            self._sim = "SIM not ready (%s)" % line.decode()
         else:
             self.stats["urcs_other"] += 1
 
@@ -349,3 +366,4 @@ class SmsDriver(AtDriver):
             self._events.append((EV_TX_FAILED, s.handle, reason))
         self._tries = 0
         self._list_at = None
+        self._sim = None
