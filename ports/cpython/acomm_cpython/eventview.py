@@ -40,7 +40,39 @@ def _link_name(link: Any) -> Optional[str]:
     return None if link is None else str(link.name)
 
 
-class LinkStatus(Event):
+class _OnLink(Event):
+    # events that come from one link (its name)
+    __slots__ = ()
+
+    @property
+    def link(self) -> str:
+        return str(self.raw[E.LINK].name)
+
+
+class _Outcome(Event):
+    # a request's or a packet's status: where in the tuple it sits
+    __slots__ = ()
+    _STATUS = E.STATUS
+    _REASON = E.REASON
+
+    @property
+    def status(self) -> int:
+        return int(self.raw[self._STATUS])
+
+    @property
+    def status_name(self) -> str:
+        return E.STATUS_NAMES[self.raw[self._STATUS]]
+
+    @property
+    def reason(self) -> str:
+        return str(self.raw[self._REASON])
+
+    @property
+    def final(self) -> bool:
+        return bool(E.is_final(self.raw[self._STATUS]))
+
+
+class LinkStatus(_OnLink, _Outcome):
     """A link request's status: queued, transmitting, waiting, then one final one."""
 
     __slots__ = ()
@@ -48,40 +80,16 @@ class LinkStatus(Event):
     _fields = ("link", "request_id", "status_name", "reason", "final")
 
     @property
-    def link(self) -> str:
-        return str(self.raw[E.LINK].name)
-
-    @property
     def request_id(self) -> int:
         return int(self.raw[E.REQ_ID])
 
-    @property
-    def status(self) -> int:
-        return int(self.raw[E.STATUS])
 
-    @property
-    def status_name(self) -> str:
-        return E.STATUS_NAMES[self.raw[E.STATUS]]
-
-    @property
-    def reason(self) -> str:
-        return str(self.raw[E.REASON])
-
-    @property
-    def final(self) -> bool:
-        return bool(E.is_final(self.raw[E.STATUS]))
-
-
-class Received(Event):
+class Received(_OnLink):
     """A frame that arrived on a link (its transport fragments never show here)."""
 
     __slots__ = ()
     kind = "received"
     _fields = ("link", "source", "destination", "data", "authenticated")
-
-    @property
-    def link(self) -> str:
-        return str(self.raw[E.LINK].name)
 
     @property
     def source(self) -> str:
@@ -101,16 +109,12 @@ class Received(Event):
         return bool(self.raw[E.AUTHED]) if len(self.raw) > E.AUTHED else None
 
 
-class Availability(Event):
+class Availability(_OnLink):
     """A node became available or unavailable on a link (heard, or silent too long)."""
 
     __slots__ = ()
     kind = "availability"
     _fields = ("link", "name", "state_name")
-
-    @property
-    def link(self) -> str:
-        return str(self.raw[E.LINK].name)
 
     @property
     def name(self) -> str:
@@ -129,7 +133,7 @@ class Availability(Event):
         return bool(self.raw[E.STATE] == E.AVAILABLE)
 
 
-class Caps(Event):
+class Caps(_OnLink):
     """A link's capabilities (MTU, rate, ...) became known or changed."""
 
     __slots__ = ()
@@ -137,24 +141,16 @@ class Caps(Event):
     _fields = ("link", "caps")
 
     @property
-    def link(self) -> str:
-        return str(self.raw[E.LINK].name)
-
-    @property
     def caps(self) -> Any:
         return self.raw[E.CAPS]
 
 
-class Ranges(Event):
+class Ranges(_OnLink):
     """The ranges of a ranging request: one per name asked, None where nobody answered."""
 
     __slots__ = ()
     kind = "ranges"
     _fields = ("link", "request_id", "metres")
-
-    @property
-    def link(self) -> str:
-        return str(self.raw[E.LINK].name)
 
     @property
     def request_id(self) -> int:
@@ -165,32 +161,18 @@ class Ranges(Event):
         return dict(zip(self.raw[E.NAMES], self.raw[E.METRES]))
 
 
-class PacketStatus(Event):
+class PacketStatus(_Outcome):
     """A transport packet's status at its sender; one final one per packet."""
 
     __slots__ = ()
     kind = "packet_status"
     _fields = ("packet_id", "status_name", "reason", "final")
+    _STATUS = E.PACKET_STATUS
+    _REASON = E.PACKET_REASON
 
     @property
     def packet_id(self) -> int:
         return int(self.raw[E.PID])
-
-    @property
-    def status(self) -> int:
-        return int(self.raw[E.PACKET_STATUS])
-
-    @property
-    def status_name(self) -> str:
-        return E.STATUS_NAMES[self.raw[E.PACKET_STATUS]]
-
-    @property
-    def reason(self) -> str:
-        return str(self.raw[E.PACKET_REASON])
-
-    @property
-    def final(self) -> bool:
-        return bool(E.is_final(self.raw[E.PACKET_STATUS]))
 
 
 class Packet(Event):
