@@ -39,6 +39,9 @@ BENCHES = {
     # the buoy flashed onto an emulated RP2040, relaying a diver's report to
     # Iridium through a reset: minutes of wall time, so not in `all`
     "board": "board_workload",
+    # a topside node's idle CPU and how soon a frame's bytes reach its
+    # driver: the event loop against the 5 ms polling loop before it
+    "node": "node_workload",
 }
 NOT_IN_ALL = ("compare", "soak", "attack", "sweep", "board")
 
