@@ -108,6 +108,23 @@ def diver_board(boards_dir, period_s):
     return load_config(d)
 
 
+def flash_plans(period_s=5):
+    """[(board, files, bytes)] of the run's two boards (buoy_pico, the diver's) as `acomm flash` stages them
+    for the Pico (.mpy for armv6m), without a board: `acomm bench board --quick`."""
+    from ..board.boardfiles import board_path, plan
+
+    d = tempfile.mkdtemp(prefix="picobuoy-plan-")
+    try:
+        diver_board(d, period_s)
+        out = []
+        for name, bdir in (("buoy", board_path("buoy_pico")), ("diver", os.path.join(d, "diver_pico"))):
+            entries = plan(bdir, "armv6m", stage_dir=os.path.join(d, "stage-" + name))
+            out.append((name, len(entries), sum(e.size for e in entries)))
+        return out
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+
+
 class Run:
     """One run of the scenario; run() gives its figures and evidence as a dict."""
 

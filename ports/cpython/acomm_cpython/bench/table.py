@@ -10,7 +10,13 @@ import sys
 
 from .runtime import find_micropython, run_micropython
 
-# name -> workload module (in acomm_cpython.bench.workloads)
+# name -> workload module (in acomm_cpython.bench.workloads). A workload has
+# run(emit, quick=False): emit(name, value, unit) for each figure; quick, its
+# code path with small sizes (tests/cpython/test_bench_all.py runs every
+# benchmark here that way, so a new one must take it and stay quick: a few
+# seconds). PER_RUNTIME: the figures that depend on the runtime; the module
+# then runs as a script under MicroPython too (--quick: quick_argv() in
+# timer) and imports only acomm and its own folder (test_port_layers).
 BENCHES = {
     "core": "core_workload",
     "queue": "queue_workload",

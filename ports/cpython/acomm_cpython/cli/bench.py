@@ -13,6 +13,8 @@ def add_arguments(b):
     b.add_argument("--only", help="footprint: one group of figures (frozen_cortex_m, romfs_cortex_m, mpy_cortex_m, "
                                   "frozen_i386, romfs_i386, mpy_i386, flash_text, unix64)")
     b.add_argument("--open", action="store_true", help="attack: the nodes' key in open mode, to see what it allows")
+    b.add_argument("--quick", action="store_true", help="each workload's code path with small sizes and short "
+                                                         "timings, to check that it runs (the figures mean nothing)")
 
 
 def main(args):
@@ -49,7 +51,7 @@ def main(args):
         print("--open is for the attack bench", file=sys.stderr)
         return 2
     try:
-        bench.run(names, emit, only, open_mode)
+        bench.run(names, emit, only, open_mode, args.quick)
     except RuntimeError as e:  # a runtime the bench needs is missing: the message says which
         print("acomm bench %s: %s" % (args.name, e), file=sys.stderr)
         return 1

@@ -346,8 +346,8 @@ class Attack(Forger):
 UNITS = {"attack_max_reassembly_bytes": "B"}
 
 
-def run(emit, open_mode=False):
-    a = Attack(strict=not open_mode)
+def run(emit, open_mode=False, quick=False):
+    a = Attack(strict=not open_mode, minutes=3 if quick else MINUTES)
     try:
         a.run()
         f = a.figures()

@@ -28,9 +28,9 @@
 import math
 
 try:
-    from acomm_cpython.bench.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads.timer import emit_json, quick_argv, rate, set_quick
 except ImportError:  # MicroPython: the runner puts this folder on the path
-    from timer import emit_json, rate
+    from timer import emit_json, quick_argv, rate, set_quick
 
 from acomm.codec.bits import BitReader, BitWriter
 from acomm.catalog import MODULES, load
@@ -95,7 +95,8 @@ def packed(cats):
     return bits, limit
 
 
-def run(emit):
+def run(emit, quick=False):
+    set_quick(quick)
     cats = _catalogs()
     for name in cats:
         cat = cats[name]
@@ -124,4 +125,4 @@ def run(emit):
 
 
 if __name__ == "__main__":
-    run(emit_json)
+    run(emit_json, quick_argv())

@@ -12,10 +12,10 @@
 
 try:
     from acomm_cpython.bench.workloads import compare_items as ci
-    from acomm_cpython.bench.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads.timer import emit_json, quick_argv, rate, set_quick
 except ImportError:  # MicroPython: the runner puts this folder on the path
     import compare_items as ci
-    from timer import emit_json, rate
+    from timer import emit_json, quick_argv, rate, set_quick
 
 from acomm.codec import compress
 from acomm import frame
@@ -72,7 +72,8 @@ def check(name, coder):
         assert got[0][1] == coder.values
 
 
-def run(emit):
+def run(emit, quick=False):
+    set_quick(quick)
     cs = coders()
     for name in ci.ITEMS:
         c = cs[name]
@@ -88,4 +89,4 @@ def run(emit):
 
 
 if __name__ == "__main__":
-    run(emit_json)
+    run(emit_json, quick_argv())

@@ -154,7 +154,8 @@ def speed_records(peers, rounds=ROUNDS):
     return out
 
 
-def run(emit, speed=True, slow=True):
+def run(emit, speed=True, slow=True, quick=False):
+    # quick: every part, each in its own quick mode (2 timed rounds)
     gone = cp.missing()
     if gone:
         print("note: peers not installed, their rows skipped: %s (pip install .[bench])"
@@ -163,28 +164,28 @@ def run(emit, speed=True, slow=True):
     for rec in static_records(peers):
         emit(*rec)
     if speed:
-        for rec in speed_records(peers):
+        for rec in speed_records(peers, 2 if quick else ROUNDS):
             emit(*rec)
-        cs.run(lambda n, v, u: emit(n + "_cpython", v, u))
-        _micropython_speed(emit)
+        cs.run(lambda n, v, u: emit(n + "_cpython", v, u), quick)
+        _micropython_speed(emit, quick)
     if slow:
-        _transfer(emit)
-        _footprint(emit)
-        _simulator(emit)
+        _transfer(emit, quick)
+        _footprint(emit, quick)
+        _simulator(emit, quick)
 
 
-def _micropython_speed(emit):
+def _micropython_speed(emit, quick=False):
     from acomm_cpython.bench.runtime import find_micropython, run_micropython
 
     mp = find_micropython()
     if mp is None:
         print("note: no micropython command found; MicroPython figures skipped", file=sys.stderr)
         return
-    for rec in run_micropython("compare_speed", mp):
+    for rec in run_micropython("compare_speed", mp, quick):
         emit(rec["name"] + "_micropython", rec["value"], rec["unit"])
 
 
-def _transfer(emit):
+def _transfer(emit, quick=False):
     from acomm_cpython.bench.workloads import transfer_workload
 
     seen = {}
@@ -193,7 +194,7 @@ def _transfer(emit):
         seen[name] = value
         emit("transfer_" + name, value, unit)
 
-    transfer_workload.run(tr)
+    transfer_workload.run(tr, quick)
     for modem in transfer_workload.MODEMS:
         for loss in transfer_workload.LOSSES:
             pct = int(loss * 100)
@@ -202,23 +203,25 @@ def _transfer(emit):
             emit("transfer_arq_over_saw_%s_%d" % (modem, pct), round(a / s, 3), "ratio")
 
 
-def _simulator(emit):
+def _simulator(emit, quick=False):
     # the simulator's speed and scale (sim_workload) and a sweep's speed-up
     # on 2 Dask workers (sweep_workload, when Dask is installed)
     from acomm_cpython.bench.workloads import sim_workload as sw
     from acomm_cpython.bench.workloads import sweep_workload
 
-    _, wall, _ = sw.run_once("tdma")
-    emit("sim_speedup_16_nodes", round(sw.SIM_S / wall, 1), "x")
-    sw.run_scales(lambda n, v, u: emit(n, round(v, 4) if isinstance(v, float) else v, u))
+    sim_s = 120 if quick else sw.SIM_S
+    _, wall, _ = sw.run_once("tdma", sim_s=sim_s)
+    emit("sim_speedup_16_nodes", round(sim_s / wall, 1), "x")
+    sw.run_scales(lambda n, v, u: emit(n, round(v, 4) if isinstance(v, float) else v, u),
+                  *((1, sw.PERIOD_S) if quick else ()))
     try:
-        sweep_workload.run(lambda n, v, u: emit(n, round(v, 3), u))
+        sweep_workload.run(lambda n, v, u: emit(n, round(v, 3), u), quick)
     except RuntimeError as e:
         print("note: %s" % e, file=sys.stderr)
 
 
-def _footprint(emit):
+def _footprint(emit, quick=False):
     # passed through as it comes: the footprint bench is its owner's to change
     from acomm_cpython.bench.workloads import footprint_workload
 
-    footprint_workload.run(lambda n, v, u: emit("footprint_" + n, v, u))
+    footprint_workload.run(lambda n, v, u: emit("footprint_" + n, v, u), quick=quick)

@@ -1,9 +1,9 @@
 # Core throughput figures, portable: runs in-process on CPython and as a
 # script on the MicroPython unix port (or a board: `mpremote run`).
 try:
-    from acomm_cpython.bench.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads.timer import emit_json, quick_argv, rate, set_quick
 except ImportError:  # MicroPython: the runner puts this folder on the path
-    from timer import emit_json, rate
+    from timer import emit_json, quick_argv, rate, set_quick
 
 from acomm import frame
 from acomm.codec.crc import crc16, crc16_pure
@@ -11,7 +11,8 @@ from acomm.codec.crc import crc16, crc16_pure
 PER_RUNTIME = ("crc16_mbps", "crc16_pure_mbps", "frame_roundtrips_per_s")
 
 
-def run(emit):
+def run(emit, quick=False):
+    set_quick(quick)
     data = bytes(range(256)) * 4
 
     def crc_block():
@@ -42,4 +43,4 @@ def run(emit):
 
 
 if __name__ == "__main__":
-    run(emit_json)
+    run(emit_json, quick_argv())

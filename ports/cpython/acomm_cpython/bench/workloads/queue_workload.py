@@ -20,9 +20,9 @@
 import gc
 
 try:
-    from acomm_cpython.bench.workloads.timer import elapsed_us, emit_json, now_us
+    from acomm_cpython.bench.workloads.timer import elapsed_us, emit_json, now_us, quick_argv
 except ImportError:  # run as a script: this folder is on the path
-    from timer import elapsed_us, emit_json, now_us
+    from timer import elapsed_us, emit_json, now_us, quick_argv
 
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.prng import Prng
@@ -136,22 +136,25 @@ def bench_alarm_latency(n_alarms=100, flood=10000, aging_ms=0, prio=PRIO_ALARM):
     return worst
 
 
-def run(emit):
+def run(emit, quick=False):
+    # quick: 500 cycles on a queue of 50, 5 alarms in a flood of 200
+    ops_size = (500, 50) if quick else (20000, 1000)
+    flood = (5, 200) if quick else (100, 10000)
     gc.collect()
-    ops = bench_queue_ops()
+    ops = bench_queue_ops(*ops_size)
     emit("queue_ops_per_s", int(ops), "ops/s")
     gc.collect()
-    emit("alarm_latency_frames_under_flood", bench_alarm_latency(), "frames")
+    emit("alarm_latency_frames_under_flood", bench_alarm_latency(*flood), "frames")
     gc.collect()
     # fairness aging (one class per second waited) and what it costs: alarms
     # keep their place; class-2 telemetry now competes with aged flood classes
-    emit("alarm_latency_frames_under_flood_aging", bench_alarm_latency(aging_ms=1000), "frames")
+    emit("alarm_latency_frames_under_flood_aging", bench_alarm_latency(*flood, aging_ms=1000), "frames")
     gc.collect()
-    emit("telemetry_latency_frames_under_flood", bench_alarm_latency(prio=2), "frames")
+    emit("telemetry_latency_frames_under_flood", bench_alarm_latency(*flood, prio=2), "frames")
     gc.collect()
-    emit("telemetry_latency_frames_under_flood_aging", bench_alarm_latency(aging_ms=1000, prio=2), "frames")
+    emit("telemetry_latency_frames_under_flood_aging", bench_alarm_latency(*flood, aging_ms=1000, prio=2), "frames")
     gc.collect()
 
 
 if __name__ == "__main__":
-    run(emit_json)
+    run(emit_json, quick_argv())

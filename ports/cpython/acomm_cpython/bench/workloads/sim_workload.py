@@ -52,7 +52,7 @@ def airtime_ms():
     return ((n + FRAMING) * 8000 + BITRATE - 1) // BITRATE
 
 
-def run_once(kind, seed=1):
+def run_once(kind, seed=1, sim_s=SIM_S):
     air = airtime_ms()
     sched = [(i + 1, air + 500 + 400, 200) for i in range(NODES)]
     w = World(seed=seed)
@@ -61,7 +61,7 @@ def run_once(kind, seed=1):
         w.add("n%d" % (i + 1), i + 1, "bpsk", position=(50.0 * i, 0.0, 10.0), mac=mac,
               link_opts={"advert_period_ms": 600000, "queue_capacity": 8})
     t0 = time.perf_counter()
-    sent = _broadcast_each_minute(w, SIM_S)
+    sent = _broadcast_each_minute(w, sim_s)
     wall = time.perf_counter() - t0
     rx = sum(1 for sn in w.nodes.values() for e in sn.events if e[0] == EV_RECEIVED)
     return w, wall, rx / (sent * (NODES - 1))
@@ -168,11 +168,11 @@ def caddy_run(seen, sim_ms=300000):
     return cyc, t[len(t) // 2] / 1000, prop
 
 
-def run_caddy(emit):
+def run_caddy(emit, sim_ms=300000):
     from acomm_sim.caddy import SEED_BUDGET_S, budget_s
 
     for seen, tag in ((False, ""), (True, "_seen")):
-        cyc, med, prop = caddy_run(seen)
+        cyc, med, prop = caddy_run(seen, sim_ms)
         emit("caddy_cycle%s_s" % tag, med, "s")
         emit("caddy_cycle%s_budget_s" % tag, SEED_BUDGET_S[1 if seen else 0], "s")
         emit("caddy_cycle%s_budget_acomm_s" % tag, budget_s(seen), "s")
@@ -181,7 +181,7 @@ def run_caddy(emit):
         emit("caddy_timeouts%s" % tag, sum(c["timeouts"] for c in cyc.counters), "steps")
 
 
-def run_scales(emit, rounds=SCALE_ROUNDS):
+def run_scales(emit, rounds=SCALE_ROUNDS, sim_s=SCALE_SIM_S):
     # each size runs `rounds` times, the sizes interleaved, and each figure
     # is the size's fastest run: on a machine shared with other work single
     # runs moved the ratios between 2.6 and 6.2. Each world is dropped and
@@ -192,13 +192,13 @@ def run_scales(emit, rounds=SCALE_ROUNDS):
     heard = {}
     for _ in range(rounds):
         for n in SCALE_NODES:
-            w, wall, heard[n] = run_scale(n, settle=True)
+            w, wall, heard[n] = run_scale(n, sim_s, settle=True)
             del w
             if n not in best or wall < best[n]:
                 best[n] = wall
     cost = {}
     for n in SCALE_NODES:
-        cost[n] = best[n] * 1000 / SCALE_SIM_S
+        cost[n] = best[n] * 1000 / sim_s
         emit("sim_cost_%d_nodes" % n, cost[n], "ms/s")
         emit("sim_heard_per_frame_%d_nodes" % n, heard[n], "copies")
     emit("sim_cost_ratio_64_vs_16", cost[64] / cost[16], "ratio")
@@ -206,13 +206,16 @@ def run_scales(emit, rounds=SCALE_ROUNDS):
     emit("sim_memory_256_nodes", scale_memory(256), "B")
 
 
-def run(emit):
-    w, wall, pdr = run_once("tdma")
-    emit("sim_speedup_16_nodes", SIM_S / wall, "x")
-    run_scales(emit)
+def run(emit, quick=False):
+    # quick: 2 simulated minutes, the scale runs once for one minute, and
+    # 30 s of the CADDY cycle
+    sim_s = 120 if quick else SIM_S
+    w, wall, pdr = run_once("tdma", sim_s=sim_s)
+    emit("sim_speedup_16_nodes", sim_s / wall, "x")
+    run_scales(emit, *((1, PERIOD_S) if quick else ()))
     emit("tdma_collisions", w.channel.collided, "copies")
     emit("tdma_pdr", pdr, "ratio")
-    w, wall, pdr = run_once("aloha")
+    w, wall, pdr = run_once("aloha", sim_s=sim_s)
     emit("aloha_collisions", w.channel.collided, "copies")
     emit("aloha_pdr", pdr, "ratio")
-    run_caddy(emit)
+    run_caddy(emit, 30000 if quick else 300000)

@@ -30,9 +30,9 @@ import os
 from binascii import hexlify
 
 try:
-    from acomm_cpython.bench.workloads.timer import elapsed_us, emit_json, now_us, rate
+    from acomm_cpython.bench.workloads.timer import elapsed_us, emit_json, now_us, quick_argv, rate, set_quick
 except ImportError:  # run as a script: this folder is on the path
-    from timer import elapsed_us, emit_json, now_us, rate
+    from timer import elapsed_us, emit_json, now_us, quick_argv, rate, set_quick
 
 from acomm.compat import IS_MICROPYTHON
 from acomm.transport.store import Store
@@ -56,11 +56,11 @@ def _appends(path, sync):
     return r
 
 
-def _recover(path):
+def _recover(path, kib=100):
     s = Store(path, capacity_bytes=1 << 20, max_record=256, sync=False)
     data = bytes(range(64))
     k = 0
-    while s.used_bytes < 100 * 1024:
+    while s.used_bytes < kib * 1024:
         s.put(k, data)
         k += 1
     size = s.used_bytes
@@ -74,14 +74,15 @@ def _recover(path):
     return size / 1024 * 1e6 / dt
 
 
-def run(emit):
+def run(emit, quick=False):
+    set_quick(quick)
     d = "/tmp/acomm-bench-store-" + hexlify(os.urandom(4)).decode()
     os.mkdir(d)
     try:
         gc.collect()
         emit("store_appends_per_s", int(_appends(d + "/a", False)), "puts/s")
         gc.collect()
-        emit("store_recover_kib_per_s", _recover(d + "/b"), "KiB/s")
+        emit("store_recover_kib_per_s", _recover(d + "/b", 8 if quick else 100), "KiB/s")
         if not IS_MICROPYTHON:
             emit("store_appends_fsync_per_s_cpython", int(_appends(d + "/c", True)), "puts/s")
     finally:
@@ -91,4 +92,4 @@ def run(emit):
 
 
 if __name__ == "__main__":
-    run(emit_json)
+    run(emit_json, quick_argv())

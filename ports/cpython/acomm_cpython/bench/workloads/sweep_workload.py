@@ -36,7 +36,18 @@ def _least(best, t):
     return t if best is None else min(best, t)
 
 
-def run(emit):
+def run(emit, quick=False):
+    if quick:
+        # the local sweep alone, two 12-second runs: no Dask cluster
+        d = tempfile.mkdtemp(prefix="acomm-sweep-bench-")
+        try:
+            t0 = time.perf_counter()
+            sweep.sweep(SCENARIO, sweep.parse_grid(SCENARIO, ["mac=tdma,aloha"]), 1, 0.2, d, workers=1, quiet=True,
+                        plots=False)
+            emit("sweep_local_1_core_s", time.perf_counter() - t0, "s")
+        finally:
+            shutil.rmtree(d, ignore_errors=True)
+        return
     try:
         from distributed import LocalCluster
     except ImportError:

@@ -63,7 +63,7 @@ def encode(kind, n, vector):
     return teleop.CATALOG.pack([("thrust", teleop.thrust_values(vector, n % teleop.SEQ_MOD))])
 
 
-def run_config(profile, distance, kind, seed=1):
+def run_config(profile, distance, kind, seed=1, cycles=CYCLES):
     ch = Channel(seed=seed, loss_curve=LOSS_CURVES[profile])
     w = World(seed=seed, channel=ch)
     heard = []  # (time, event) at the ROV, timed to the step it happened in
@@ -76,7 +76,7 @@ def run_config(profile, distance, kind, seed=1):
     seen = 0
     last = None
     n = 0
-    for _ in range(CYCLES):
+    for _ in range(cycles):
         for _, vector in SEQUENCE:
             for _ in range(STEP_S * 1000 // POLL_MS):
                 if vector != last:
@@ -114,11 +114,11 @@ def _number(kind, payload, newest):
     return k or None
 
 
-def run(emit):
+def run(emit, quick=False):
     for place, dist in DISTANCES:
         for profile in PROFILES:
             for kind in ("paper", "acomm"):
-                r = run_config(profile, dist, kind)
+                r = run_config(profile, dist, kind, cycles=1 if quick else CYCLES)
                 base = "teleop_%s_%s_%s" % (place, profile, kind)
                 emit(base + "_pdr", r["pdr"], "%")
                 emit(base + "_latency_median", r["latency_median_ms"], "ms")

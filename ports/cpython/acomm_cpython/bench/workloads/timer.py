@@ -1,6 +1,9 @@
 # What the workloads share, on both runtimes: wall-clock microseconds (for
-# benchmark workloads only: the core never reads the clock), rate() and
-# emit_json(). Every portable workload imports this first, so it also puts
+# benchmark workloads only: the core never reads the clock), rate(),
+# emit_json() and quick mode (`acomm bench NAME --quick`, or --quick to a
+# workload run as a script: its code path with small sizes, every rate()
+# measured for QUICK_US, the figures meaningless; a workload's run(emit,
+# quick) calls set_quick). Every portable workload imports this first, so it also puts
 # the checkout's root on the path of a workload run as a script from a
 # checkout (python3 or micropython ports/cpython/acomm_cpython/bench/
 # workloads/NAME.py): five folders above this one.
@@ -30,9 +33,25 @@ except ImportError:
         return perf_counter() * 1e6 - t0
 
 
+QUICK_US = 2000
+_quick = [False]
+
+
+def set_quick(on):
+    """Quick mode on (rate() measures for QUICK_US) or off."""
+    _quick[0] = bool(on)
+
+
+def quick_argv():
+    """Whether a workload run as a script was given --quick."""
+    return "--quick" in sys.argv
+
+
 def rate(fn, min_us=300000):
     # Calls fn() (which does `k` units of work and returns k) until min_us
-    # have passed; returns units per second.
+    # have passed (QUICK_US in quick mode); returns units per second.
+    if _quick[0]:
+        min_us = QUICK_US
     units = 0
     t0 = now_us()
     while True:

