@@ -12,7 +12,7 @@
 # default): contacts and the announce period run on it, in real time even
 # when the node runs on simulated time; link requests take the node's own
 # clock. wall() gives the epoch seconds that IMC headers and deadlines use. The socket loop is
-# acomm_cpython.imcbridge.
+# acomm_cpython.bridges.imcbridge.
 #
 # Every request accepted from IMC ends with exactly one final status. One
 # that is refused gets its final status at once (INV_ADDR, INV_SIZE, BUSY,

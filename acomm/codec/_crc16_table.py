@@ -3,7 +3,7 @@
 # flash, where a table computed at import took 512 bytes of a board's heap.
 # Read by the viper CRC (frozen firmware) and by CPython; a board whose
 # modules load from its filesystem never imports it (FROZEN_ONLY in
-# acomm_cpython.boardfiles). tests/core/test_crc.py checks it against the
+# acomm_cpython.board.boardfiles). tests/core/test_crc.py checks it against the
 # polynomial.
 TABLE_LE = (
     b"\x00\x00\xc1\xc0\x81\xc1\x40\x01\x01\xc3\xc0\x03\x80\x02\x41\xc2\x01\xc6\xc0\x06\x80\x07\x41\xc7\x00\x05\xc1\xc5\x81\xc4\x40\x04"

@@ -1,6 +1,6 @@
 // Runs MicroPython's rp2 firmware on rp2040js 1.4.1 and puts the board's USB
 // CDC REPL, UART0, UART1 and a control port on TCP. Started by
-// ports/cpython/acomm_cpython/picoboard.py, which puts a pty in front of each.
+// ports/cpython/acomm_cpython/board/picoboard.py, which puts a pty in front of each.
 //
 //   node tools/rp2040/runner.mjs --firmware F.uf2|F.bin --bootrom rp2040-bootrom-b1.bin
 //        [--flash IMAGE] [--host 127.0.0.1] [--usb-port N] [--uart0-port N] [--uart1-port N]
