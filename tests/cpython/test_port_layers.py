@@ -246,3 +246,12 @@ def test_the_micropython_check_sees_a_simulator_import(tmp_path, monkeypatch):
         "from acomm_sim.clock import ManualClock\nPER_RUNTIME = ('x',)\n")
     assert micropython_workloads() == ["q_workload"]
     assert micropython_imports("q_workload") == [(4, "timer"), (5, "acomm_sim.clock")]
+
+
+def test_setup_cfg_lists_every_package_of_the_port():
+    # a subpackage missing from setup.cfg's packages is missing from the wheel
+    with open(os.path.join(ROOT, "setup.cfg")) as f:
+        text = f.read()
+    listed = set(text.split("packages =", 1)[1].split("package_dir", 1)[0].split())
+    have = set(m for m, p in modules().items() if p.endswith("__init__.py"))
+    assert sorted(have - listed) == []
