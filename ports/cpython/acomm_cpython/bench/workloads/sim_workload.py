@@ -52,7 +52,7 @@ def airtime_ms():
     return ((n + FRAMING) * 8000 + BITRATE - 1) // BITRATE
 
 
-def run_once(kind, seed=1, sim_s=SIM_S):
+def run_once(kind, seed=1, sim_s=None):
     air = airtime_ms()
     sched = [(i + 1, air + 500 + 400, 200) for i in range(NODES)]
     w = World(seed=seed)
@@ -61,7 +61,7 @@ def run_once(kind, seed=1, sim_s=SIM_S):
         w.add("n%d" % (i + 1), i + 1, "bpsk", position=(50.0 * i, 0.0, 10.0), mac=mac,
               link_opts={"advert_period_ms": 600000, "queue_capacity": 8})
     t0 = time.perf_counter()
-    sent = _broadcast_each_minute(w, sim_s)
+    sent = _broadcast_each_minute(w, SIM_S if sim_s is None else sim_s)
     wall = time.perf_counter() - t0
     rx = sum(1 for sn in w.nodes.values() for e in sn.events if e[0] == EV_RECEIVED)
     return w, wall, rx / (sent * (NODES - 1))
@@ -181,7 +181,8 @@ def run_caddy(emit, sim_ms=300000):
         emit("caddy_timeouts%s" % tag, sum(c["timeouts"] for c in cyc.counters), "steps")
 
 
-def run_scales(emit, rounds=SCALE_ROUNDS, sim_s=SCALE_SIM_S):
+def run_scales(emit, rounds=SCALE_ROUNDS, sim_s=None):
+    sim_s = SCALE_SIM_S if sim_s is None else sim_s
     # each size runs `rounds` times, the sizes interleaved, and each figure
     # is the size's fastest run: on a machine shared with other work single
     # runs moved the ratios between 2.6 and 6.2. Each world is dropped and

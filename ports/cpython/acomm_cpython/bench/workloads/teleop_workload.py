@@ -63,7 +63,7 @@ def encode(kind, n, vector):
     return teleop.CATALOG.pack([("thrust", teleop.thrust_values(vector, n % teleop.SEQ_MOD))])
 
 
-def run_config(profile, distance, kind, seed=1, cycles=CYCLES):
+def run_config(profile, distance, kind, seed=1, cycles=None):
     ch = Channel(seed=seed, loss_curve=LOSS_CURVES[profile])
     w = World(seed=seed, channel=ch)
     heard = []  # (time, event) at the ROV, timed to the step it happened in
@@ -76,7 +76,7 @@ def run_config(profile, distance, kind, seed=1, cycles=CYCLES):
     seen = 0
     last = None
     n = 0
-    for _ in range(cycles):
+    for _ in range(CYCLES if cycles is None else cycles):
         for _, vector in SEQUENCE:
             for _ in range(STEP_S * 1000 // POLL_MS):
                 if vector != last:
@@ -118,7 +118,7 @@ def run(emit, quick=False):
     for place, dist in DISTANCES:
         for profile in PROFILES:
             for kind in ("paper", "acomm"):
-                r = run_config(profile, dist, kind, cycles=1 if quick else CYCLES)
+                r = run_config(profile, dist, kind, cycles=1 if quick else None)
                 base = "teleop_%s_%s_%s" % (place, profile, kind)
                 emit(base + "_pdr", r["pdr"], "%")
                 emit(base + "_latency_median", r["latency_median_ms"], "ms")

@@ -48,12 +48,12 @@ def ideal_bps(driver, loss):
     return mtu * 8 * 1000 / air * (1 - loss)
 
 
-def run_acomm(modem, loss, seed=1, size=SIZE):
+def run_acomm(modem, loss, seed=1, size=None):
     w, a, b = _world(modem, loss, seed)
     wall = lambda: w.now() // 1000  # noqa: E731
     ta = Transport.of(a.node, wall=wall, compress=False)
     Transport.of(b.node, wall=wall, compress=False)
-    data = Prng(seed).bytes(size)
+    data = Prng(seed).bytes(SIZE if size is None else size)
     t0 = w.now()
     pid = ta.send(t0, "buoy", data, 36000, 5)
     ok = w.run(36000000, until=lambda: any(e[0] == EV_PACKET_STATUS and e[1] == pid and e[2] == DELIVERED
@@ -63,10 +63,11 @@ def run_acomm(modem, loss, seed=1, size=SIZE):
     return (w.now() - t0) / 1000, a.driver
 
 
-def run_stop_and_wait(modem, loss, seed=1, size=SIZE):
+def run_stop_and_wait(modem, loss, seed=1, size=None):
     w, a, b = _world(modem, loss, seed)
     link = a.link
     mtu = link.mtu_for(1)
+    size = SIZE if size is None else size
     data = Prng(seed).bytes(size)
     t0 = w.now()
     for k in range(0, size, mtu):
