@@ -183,3 +183,17 @@ def test_the_blocking_form():
             assert threading.current_thread() is threading.main_thread()
     finally:
         b.close()
+
+
+def test_closing_the_node_ends_the_calls_still_waiting():
+    async def main():
+        a = open_node("buoy", 1, udp="127.0.0.1:0", multicast=False, known={"diver": 2},
+                      udp_peers={2: "127.0.0.1:9"}, link_options=ADVERT)
+        buoy = await a.__aenter__()
+        task = asyncio.ensure_future(buoy.send("diver", b"never acknowledged", lifespan_s=30, ack=True))
+        await asyncio.sleep(0.1)
+        await buoy.close()
+        with pytest.raises(AcommError, match="closed"):
+            await task
+
+    run(main())

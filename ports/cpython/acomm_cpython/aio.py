@@ -216,7 +216,8 @@ class AsyncNode:
 
     async def close(self) -> None:
         """Stops the node and closes its ports and store. Requests still running are left as they
-        are (a persistent store keeps the transport's packets for the next start)."""
+        are (a persistent store keeps the transport's packets for the next start); a call still
+        awaiting one raises AcommError."""
         if self._closed:
             return
         self._closed = True
@@ -225,7 +226,8 @@ class AsyncNode:
             s.close()
         for st in self._requests.values():
             if st._future is not None and not st._future.done():
-                st._future.cancel()
+                # no final status will come: the awaiting call learns why
+                st._future.set_exception(AcommError("the node closed before %r had its final status" % st))
         for c in self._closers:
             try:
                 c.close()
