@@ -173,31 +173,26 @@ def main(args):
             os.makedirs(args.inbox, exist_ok=True)
         console = Console(node, transport, out, args.lifespan, args.inbox, wheres)
         node.listen(console.on_event)
-        # typed lines, the --send list and the page's commands, one at a time
-        tick = nodeloop.with_web(args, node, out, console, node.step, closers)
-        nodeloop.wait_started(tick, watches, out, args.startup_timeout, node, ports)
-        out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
         pending = [keyval(m) for m in args.send]
 
         def send_pending():
             pending[:] = [m for m in pending if not _send_when_heard(console, node, m[0], m[1])]
 
-        nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds, send_pending, node=node, ports=ports)
-        for dst, _ in pending:
-            out.emit({"event": "error", "error": "not sent: %s was never heard" % dst})
-        out.emit({"event": "stopped"})
-        return 0
+        def never_heard():
+            for dst, _ in pending:
+                out.emit({"event": "error", "error": "not sent: %s was never heard" % dst})
+
+        # typed lines, the --send list and the page's commands, one at a time
+        return nodeloop.session("acomm node", args, node, out, console, node.step, watches, ports, closers,
+                                send_pending, after=never_heard)
     except ModemSpecError as e:
         print("acomm node: %s" % e, file=sys.stderr)
         return 2
-    except nodeloop.WebError as e:
-        print("acomm node: %s" % e, file=sys.stderr)
-        return e.status
     except (ModemError, AcommError, OSError) as e:
         print("acomm node: %s" % nodeloop.describe(e), file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        return 0  # during the start-up
+        return 0  # while the links open
     finally:
         for c in closers:
             try:

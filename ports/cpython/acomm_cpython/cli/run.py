@@ -84,18 +84,11 @@ def main(args):
         if w is not None and not args.web:
             # the board's own console field, as on the board
             args.web = "%s:%d" % (w["host"], w["port"])
-        tick = nodeloop.with_web(args, node, out, console, tick, closers, w["password"] if w is not None else None)
-        nodeloop.wait_started(tick, watches, out, args.startup_timeout, node, streams)
-        out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
-        nodeloop.serve(tick, console, sys.stdin.fileno(), args.seconds, node=node, ports=streams)
-        out.emit({"event": "stopped"})
-        return 0
+        return nodeloop.session("acomm run", args, node, out, console, tick, watches, streams, closers,
+                                password=w["password"] if w is not None else None)
     except ConfigError as e:
         print("acomm run: board %s: %s" % (name, e), file=sys.stderr)
         return 2
-    except nodeloop.WebError as e:
-        print("acomm run: %s" % e, file=sys.stderr)
-        return e.status
     except (ModemError, AcommError, OSError) as e:
         print("acomm run: %s" % nodeloop.describe(e), file=sys.stderr)
         return 1

@@ -264,6 +264,37 @@ def with_web(args, node, out, console, tick, closers, password=None):
     return wrap(tick)
 
 
+def session(prog, args, node, out, console, tick, watches, ports, closers, poll=None, password=None, after=None):
+    """What `acomm node` and `acomm run` do once their links are open -> the exit status.
+
+    The web console (--web) if asked, every modem's start-up, "ready", the
+    loop until the end (serve), after() (what is left to say), "stopped":
+    0; 1 when a modem does not start or a link fails; the web's own status
+    for --web. prog names the command in the one line on standard error.
+    The caller closes `closers` (the web server joins them)."""
+    import sys
+
+    from acomm.errors import AcommError
+
+    try:
+        tick = with_web(args, node, out, console, tick, closers, password)
+        wait_started(tick, watches, out, args.startup_timeout, node, ports)
+        out.emit({"event": "ready", "node": node.name, "id": node.node_id, "links": list(node.links)})
+        serve(tick, console, sys.stdin.fileno(), args.seconds, poll, node=node, ports=ports)
+        if after is not None:
+            after()
+        out.emit({"event": "stopped"})
+        return 0
+    except WebError as e:
+        print("%s: %s" % (prog, e), file=sys.stderr)
+        return e.status
+    except (ModemError, AcommError, OSError) as e:
+        print("%s: %s" % (prog, describe(e)), file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 0  # during the start-up (the loop itself ends Ctrl-C quietly)
+
+
 def open_log(path):
     """The --log file, appended to; OSError when it cannot be opened."""
     return open(path, "a") if path else None
