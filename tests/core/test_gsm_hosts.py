@@ -5,7 +5,8 @@
 # received in both modes; the power-up lines; registration reports; errors
 # as the units give them; new-message indications as AT+CNMI asks.
 from acomm.drivers import sms_pdu as pdu
-from acomm_sim.gsm import _CLAC, POWER_UP, GsmEmulator, default_number
+from acomm_sim.gsm import POWER_UP, GsmEmulator, default_number
+from acomm_sim.gsm_general import CLAC
 from acomm_sim.gsm_net import GsmNetwork
 
 FINALS = (b"OK", b"ERROR")
@@ -88,7 +89,7 @@ PYTHON_GSMMODEM = (
     (b"AT+CFUN?", (b"+CFUN: 1",)),
     (b"AT+CMEE=1", ()),
     (b"AT+CPIN?", (b"+CPIN: READY",)),
-    (b"AT+CLAC", _CLAC),
+    (b"AT+CLAC", CLAC),
     (b"AT+CGMI", (b"acomm",)),  # manufacturer: not Huawei, so it asks +ZPAS? (ERROR: not ZTE)
     (b"AT+COPS=3,0", ()),
     (b"AT+CMGF=0", ()),

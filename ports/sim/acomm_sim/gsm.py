@@ -43,19 +43,10 @@ from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers import sms_pdu as pdu
 
 from .atmodem import AtModem
+from .gsm_general import CLAC, SETTINGS, GeneralCommands, nums, split, toa
 from .gsm_net import network_of
 
 _STAT_TEXT = (b"REC UNREAD", b"REC READ", b"STO UNSENT", b"STO SENT")
-_CHARSETS = (b"IRA", b"GSM", b"UCS2", b"HEX")
-# AT+CLAC: the commands answered here, one a line without "AT", as SIM800
-# and EC2x list theirs
-_CLAC = (b"&F", b"E", b"I", b"Q", b"V", b"Z", b"+CFUN", b"+CGMI", b"+CGMM", b"+CGMR", b"+CGREG", b"+CGSN", b"+CIMI",
-         b"+CLAC", b"+CLIP", b"+CMEE", b"+CMGD", b"+CMGF", b"+CMGL", b"+CMGR", b"+CMGS", b"+CNMI", b"+CNUM", b"+COPS",
-         b"+CPIN", b"+CPMS", b"+CRC", b"+CREG", b"+CSCA", b"+CSCS", b"+CSMP", b"+CSQ", b"+CVHU", b"+GCAP", b"+GMI",
-         b"+GMM", b"+GMR", b"+GSN")
-# settings of one number: name -> highest value (the attribute is the name
-# in lower case without "+")
-_SETTINGS = {b"+CMEE": 2, b"+CREG": 2, b"+CGREG": 2, b"+CLIP": 1, b"+CRC": 1, b"+CVHU": 1, b"+CMGF": 1}
 # what a unit prints as it comes up, (ms after the restart, line): SIM800
 # at a fixed baud rate (SIM800 AT manual V1.09 19.3: RDY, +CPIN, Call Ready,
 # SMS Ready) and Quectel EC2x
@@ -64,7 +55,6 @@ POWER_UP = {
     "ec2x": ((0, b"RDY"), (200, b"+CFUN: 1"), (400, b"+CPIN: READY"), (500, b"+QUSIM: 1"), (3000, b"+QIND: SMS DONE"),
              (3500, b"+QIND: PB DONE")),
 }
-_CME_TEXT = {3: b"operation not allowed", 4: b"operation not supported", 50: b"Incorrect parameters"}
 
 
 def default_number(address):
@@ -86,7 +76,7 @@ def _bcd2(v):
     return ((v % 10) << 4) | (v // 10)
 
 
-class GsmEmulator(AtModem):
+class GsmEmulator(GeneralCommands, AtModem):
     def __init__(self, medium, address=1, now=0, number=None, rssi=20, storage=20, send_ms=2000,
                  data_timeout_ms=60000, boot_ms=2000, banner=(b"RDY",), power_up=None):
         AtModem.__init__(self, now, banner, boot_ms)
@@ -135,28 +125,6 @@ class GsmEmulator(AtModem):
             self._urc_q = [[ticks_add(now, ms), line] for ms, line in self.power_up]
             self.poll(now)
 
-    # -- registration ---------------------------------------------------------------------------
-    def reg_stat(self):
-        # 27.007 <stat>: 1 registered (home network), 2 searching (rssi 0
-        # or 99: no network here), 0 not searching (radio off, AT+CFUN=0/4)
-        if self.cfun != 1:
-            return 0
-        return 2 if self.rssi in (0, 99) else 1
-
-    def _reg(self, n, stat):
-        # "<stat>" or, with n=2 and registered, "<stat>,"<lac>","<ci>""
-        if n == 2 and stat == 1:
-            return b'%d,"%04X","%04X"' % (stat, 1, self.address & 0xFFFF)
-        return b"%d" % stat
-
-    def _reg_moved(self, before):
-        # +CREG / +CGREG reports, where turned on, when the registration changed
-        stat = self.reg_stat()
-        if stat != before:
-            for name, n in ((b"+CREG", self.creg), (b"+CGREG", self.cgreg)):
-                if n:
-                    self.notify(name + b": " + self._reg(n, stat))
-
     # -- faults -------------------------------------------------------------------------------
     def set_rssi(self, rssi):
         before = self.reg_stat()
@@ -193,25 +161,10 @@ class GsmEmulator(AtModem):
                 return True
         return False
 
-    # -- commands --------------------------------------------------------------------------------
-    def _ident(self, name):
-        # the identification commands' text, or None
-        if name in (b"+CGMI", b"+GMI"):
-            return b"acomm"
-        if name in (b"+CGMM", b"+GMM"):
-            return b"GSM modem emulator"
-        if name in (b"+CGMR", b"+GMR"):
-            return b"Revision: acomm-sim 1"
-        if name in (b"+CGSN", b"+GSN"):
-            return b"35%013d" % self.address
-        if name == b"+CIMI":
-            return b"00101%010d" % self.address  # MCC 001 MNC 01: the test network
-        if name == b"+GCAP":
-            return b"+GCAP: +CGSM"
-        return None
+    # -- commands (the 27.007 ones are acomm_sim.gsm_general's) -----------------------------
 
     def _command(self, now, text, c):
-        name, op, arg = _split(c)
+        name, op, arg = split(c)
         if name[:1] != b"+":
             if c in (b"I", b"I0"):
                 self.reply(b"acomm GSM modem emulator")
@@ -232,13 +185,13 @@ class GsmEmulator(AtModem):
         t = self._ident(name)
         if t is not None or name == b"+CLAC":
             if op == b"":
-                for i, line in enumerate((t,) if t is not None else _CLAC):
+                for i, line in enumerate((t,) if t is not None else CLAC):
                     self.reply(line, i > 0)
             elif op != b"=?":
                 self.error()
                 return
             self.ok()
-        elif name in _SETTINGS:
+        elif name in SETTINGS:
             self._setting(name, op, arg)
         elif name in (b"+CMGS", b"+CMGR", b"+CMGL", b"+CMGD"):
             self._sms_command(now, text, name, op, arg)
@@ -249,112 +202,9 @@ class GsmEmulator(AtModem):
             else:
                 f(self, now, op, arg)
 
-    def _setting(self, name, op, arg):
-        attr = name[1:].decode().lower()
-        if op == b"=":
-            v = _nums(arg, 1, 1)
-            if v is None or v[0] > _SETTINGS[name]:
-                self.cme(50)
-                return
-            setattr(self, attr, v[0])
-        elif op == b"?":
-            n = getattr(self, attr)
-            if name in (b"+CREG", b"+CGREG"):
-                self.reply(name + b": %d," % n + self._reg(n, self.reg_stat()))
-            elif name == b"+CLIP":
-                self.reply(b"+CLIP: %d,1" % n)  # 1: CLIP provisioned
-            else:
-                self.reply(name + b": %d" % n)
-        elif op == b"=?":
-            self.reply(name + (b": (0-2)" if _SETTINGS[name] == 2 else b": (0,1)"))
-        else:
-            self.error()
-            return
-        self.ok()
-
-    def _cfun(self, now, op, arg):
-        if op == b"?":
-            self.reply(b"+CFUN: %d" % self.cfun)
-        elif op == b"=?":
-            self.reply(b"+CFUN: (0,1,4),(0,1)")
-        elif op == b"=":
-            v = _nums(arg, 1, 2)
-            if v is None or v[0] not in (0, 1, 4) or (len(v) == 2 and v[1] > 1):
-                self.cme(50)
-                return
-            before = self.reg_stat()
-            self.cfun = v[0]
-            self.ok()
-            if len(v) == 2 and v[1] == 1:
-                self.reboot(now)  # <rst> 1: a restart after OK
-            else:
-                self._reg_moved(before)
-            return
-        else:
-            self.error()
-            return
-        self.ok()
-
-    def _cpin(self, now, op, arg):
-        if op == b"?":
-            self.reply(b"+CPIN: READY")
-        elif op == b"=":
-            self.cme(3)  # no PIN is asked for
-            return
-        elif op != b"=?":
-            self.error()
-            return
-        self.ok()
-
-    def _csq(self, now, op, arg):
-        if op == b"":
-            self.reply(b"+CSQ: %d,99" % (self.rssi if self.cfun == 1 else 99))
-        elif op == b"=?":
-            self.reply(b"+CSQ: (0-31,99),(0-7,99)")
-        else:
-            self.error()
-            return
-        self.ok()
-
-    def _cops(self, now, op, arg):
-        names = self.net.operator  # long, short, numeric
-        if op == b"?":
-            if self.reg_stat() == 1:
-                self.reply(b'+COPS: 0,%d,"%s"' % (self.cops_format, names[self.cops_format]))
-            else:
-                self.reply(b"+COPS: 0")
-        elif op == b"=?":
-            self.reply(b'+COPS: (2,"%s","%s","%s"),,(0-4),(0-2)' % names)
-        elif op == b"=":
-            # 0: automatic (optionally with the format), 3: set the format;
-            # manual selection and deregistration are not modelled
-            f = arg.split(b",")
-            mode = _nums(f[0], 1, 1)
-            if mode is not None and mode[0] in (1, 2, 4):
-                self.cme(3)
-                return
-            v = _nums(arg, 1, 2)
-            if v is None or v[0] not in (0, 3) or (v[0] == 3 and len(v) < 2) or (len(v) == 2 and v[1] > 2):
-                self.cme(50)
-                return
-            if len(v) == 2:
-                self.cops_format = v[1]
-        else:
-            self.error()
-            return
-        self.ok()
-
-    def _cnum(self, now, op, arg):
-        if op == b"":
-            self.reply(b'+CNUM: "","%s",%d' % (self.number.encode(), _toa(self.number)))
-        elif op != b"=?":
-            self.error()
-            return
-        self.ok()
-
     def _csca(self, now, op, arg):
         if op == b"?":
-            self.reply(b'+CSCA: "%s",%d' % (self.smsc.encode(), _toa(self.smsc)))
+            self.reply(b'+CSCA: "%s",%d' % (self.smsc.encode(), toa(self.smsc)))
         elif op == b"=":
             q = arg.split(b'"')
             if len(q) < 3 or not q[1].lstrip(b"+").isdigit():
@@ -366,27 +216,11 @@ class GsmEmulator(AtModem):
             return
         self.ok()
 
-    def _cscs(self, now, op, arg):
-        if op == b"?":
-            self.reply(b'+CSCS: "%s"' % self.cscs)
-        elif op == b"=?":
-            self.reply(b'+CSCS: ("' + b'","'.join(_CHARSETS) + b'")')
-        elif op == b"=":
-            q = arg.strip(b'"')
-            if q not in _CHARSETS:
-                self.cme(50)
-                return
-            self.cscs = q
-        else:
-            self.error()
-            return
-        self.ok()
-
     def _csmp(self, now, op, arg):
         if op == b"?":
             self.reply(b"+CSMP: %d,%d,%d,%d" % tuple(self.csmp))
         elif op == b"=":
-            v = _nums(arg, 1, 4)
+            v = nums(arg, 1, 4)
             if v is None or max(v) > 255:
                 self.cms(305)
                 return
@@ -402,7 +236,7 @@ class GsmEmulator(AtModem):
         elif op == b"=?":
             self.reply(b"+CNMI: (0-3),(0-3),(0,2),(0-2),(0,1)")
         elif op == b"=":
-            v = _nums(arg, 1, 5)
+            v = nums(arg, 1, 5)
             if v is None or [1 for x, top in zip(v, (3, 3, 2, 2, 1)) if x > top] or (len(v) > 2 and v[2] == 1):
                 self.cms(303)
                 return
@@ -452,15 +286,6 @@ class GsmEmulator(AtModem):
             self.ok()
         else:
             self._cmgd(arg)
-
-    def cme(self, code):
-        # an error of the ME: +CME ERROR as AT+CMEE says (0: ERROR)
-        if self.cmee == 0:
-            self.error()
-        elif self.cmee == 1:
-            self.reply(b"+CME ERROR: %d" % code)
-        else:
-            self.reply(b"+CME ERROR: " + _CME_TEXT.get(code, b"unknown"))
 
     def cms(self, code):
         self.reply(b"+CMS ERROR: %d" % code)
@@ -583,34 +408,3 @@ _OTHERS = {b"+CFUN": GsmEmulator._cfun, b"+CPIN": GsmEmulator._cpin, b"+CSQ": Gs
            b"+COPS": GsmEmulator._cops, b"+CNUM": GsmEmulator._cnum, b"+CSCA": GsmEmulator._csca,
            b"+CSCS": GsmEmulator._cscs, b"+CSMP": GsmEmulator._csmp, b"+CNMI": GsmEmulator._cnmi,
            b"+CPMS": GsmEmulator._cpms}
-
-
-def _split(c):
-    # b"+CREG=1" -> (b"+CREG", b"=", b"1"); b"+CREG?" -> (.., b"?", b"");
-    # b"+CREG=?" -> (.., b"=?", b""); b"+CSQ" -> (b"+CSQ", b"", b"")
-    i = 0
-    while i < len(c) and c[i] != 61 and c[i] != 63:
-        i += 1
-    rest = c[i:]
-    if rest[:2] == b"=?":
-        return c[:i], b"=?", rest[2:]
-    return c[:i], rest[:1], rest[1:]
-
-
-def _nums(arg, lo, hi):
-    # b"2,1,0,0,0" -> [2, 1, 0, 0, 0]; None unless lo..hi decimal fields
-    f = arg.split(b",")
-    if not lo <= len(f) <= hi:
-        return None
-    out = []
-    for x in f:
-        x = x.strip()
-        if not x.isdigit() or len(x) > 5:
-            return None
-        out.append(int(x))
-    return out
-
-
-def _toa(number):
-    # type of address: 145 international ("+"), 129 national
-    return 145 if number.startswith("+") else 129
