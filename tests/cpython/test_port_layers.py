@@ -120,27 +120,10 @@ def test_the_library_imports_neither_the_simulator_nor_the_web_console():
 
 
 def test_no_import_cycle_in_the_port():
-    g = graph()
-    state = {}
-    cycles = []
+    from test_layers import cycles
 
-    def visit(m, stack):
-        state[m] = 1
-        stack.append(m)
-        for d in sorted(g.get(m, ())):
-            if d not in g or (m, d) in ALLOWED:
-                continue
-            if state.get(d) == 1:
-                cycles.append(" -> ".join(stack[stack.index(d):] + [d]))
-            elif d not in state:
-                visit(d, stack)
-        stack.pop()
-        state[m] = 2
-
-    for m in sorted(g):
-        if m not in state:
-            visit(m, [])
-    assert cycles == [], "\n".join(cycles)
+    found = cycles(graph(), ALLOWED)
+    assert found == [], "\n".join(found)
 
 
 def test_the_checker_sees_an_upward_import(tmp_path):
