@@ -65,11 +65,23 @@ rp2040-emulator:
 # runtimes are skipped with one line saying how to enable them; a firmware
 # build that fails is a failure. Without Node.js (no emulator) the RP2040
 # alone is skipped, with one line (exit 3 of board_runtests.py).
+# pytest runs as two processes side by side: the tests that boot emulated
+# boards (EMULATOR_TESTS: two thirds of its time, each on one core) and
+# all the others (mostly waiting on real-time ptys and sockets); the
+# emulators' output is printed when both end. They stage `acomm flash`
+# files apart (ACOMM_WORK_DIR), so the two never share a folder.
 I386_HEAP = 2M
+EMULATOR_TESTS = $(addprefix tests/cpython/,test_buoy_on_pico.py test_buoy_faults_on_pico.py \
+	test_footprint_pico.py test_board_on_qemu.py test_footprint_qemu.py test_rp2040_runner.py)
 test: $(VENV)/.dev rp2040-emulator
 	@$(BIN)/python tools/firmware.py build; f=$$?; \
 	$(BIN)/python tools/browser.py; \
-	$(BIN)/python -m pytest -q tests; a=$$?; \
+	mkdir -p build; \
+	ACOMM_WORK_DIR=$(CURDIR)/build/emulator-tests $(BIN)/python -m pytest -q -p no:cacheprovider \
+	  $(EMULATOR_TESTS) > build/pytest-emulators.log 2>&1 & q=$$!; \
+	$(BIN)/python -m pytest -q tests $(addprefix --ignore=,$(EMULATOR_TESTS)); a=$$?; \
+	wait $$q; g=$$?; echo "pytest, the emulated boards' tests:"; cat build/pytest-emulators.log; \
+	test $$g -eq 0 || a=1; \
 	PATH="$(CURDIR)/$(BIN):$$PATH" $(BIN)/micropython tools/mp_runtests.py tests/core; b=$$?; \
 	c=0; d=0; e=0; \
 	if [ $$f -eq 0 ]; then \

@@ -80,8 +80,11 @@ def boards_dir():
 
 
 def work_dir(*parts):
-    """Where build products go: build/ in a checkout, else the user's cache (~/.cache/acomm)."""
-    if in_checkout():
+    """Where build products go: $ACOMM_WORK_DIR, else build/ in a checkout, else the user's cache
+    (~/.cache/acomm). make test gives its two pytest processes folders of their own."""
+    if os.environ.get("ACOMM_WORK_DIR"):
+        base = os.environ["ACOMM_WORK_DIR"]
+    elif in_checkout():
         base = os.path.join(repo_root(), "build")
     else:
         base = os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "acomm")
