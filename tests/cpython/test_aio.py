@@ -167,7 +167,7 @@ def test_named_views_leave_the_core_tuples_alone():
 def test_the_blocking_form():
     b = BlockingNode.open("diver", 2, udp="127.0.0.1:0", multicast=False, known={"buoy": 1}, link_options=ADVERT)
     try:
-        port = b._node.ports["udp"].address[1]
+        port = b.ports["udp"].address[1]
         with BlockingNode.open("buoy", 1, udp="127.0.0.1:0", multicast=False, known={"diver": 2},
                                udp_peers={2: "127.0.0.1:%d" % port}, link_options=ADVERT) as a:
             st = a.send_and_wait("diver", b"hello", ack=True, lifespan_s=10)

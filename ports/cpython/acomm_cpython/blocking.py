@@ -81,6 +81,11 @@ class Node:
     def name(self) -> str:
         return self._node.name
 
+    @property
+    def ports(self) -> Dict[str, Any]:
+        """Link name -> its stream or port (a UdpPort's .address: where it listens)."""
+        return self._node.ports
+
     def send_and_wait(self, dst: str, data: bytes, lifespan_s: float = 60, priority: int = 10, ack: bool = False,
                       link: Optional[str] = None, timeout_s: Optional[float] = None) -> Status:
         """Sends one frame and blocks until its final Status (aio.AsyncNode.send). timeout_s: give up

@@ -36,10 +36,6 @@ class Event:
         return hash(self.raw)
 
 
-def _link_name(link: Any) -> Optional[str]:
-    return None if link is None else str(link.name)
-
-
 class _OnLink(Event):
     # events that come from one link (its name)
     __slots__ = ()
@@ -210,7 +206,8 @@ class Refused(Event):
     @property
     def link(self) -> Optional[str]:
         """The link it came on; None for a transport packet."""
-        return _link_name(self.raw[E.LINK])
+        link = self.raw[E.LINK]
+        return None if link is None else str(link.name)
 
     @property
     def source(self) -> str:

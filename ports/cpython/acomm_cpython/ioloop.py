@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import asyncio
 import select
-from typing import Any, Callable, Dict, List, Optional, Sequence, Set
+from typing import Any, Callable, List, Optional, Sequence, Set
 
 BUSY_MS = 10
 PENDING_MS = 100
@@ -29,15 +29,14 @@ IDLE_MS = 250
 
 
 def next_wake_ms(node: Any, ports: Sequence[Any], now: int) -> int:
-    """How long the node may sleep after a step at `now` before its next step is due (ms)."""
+    """How long the node may sleep after a step at `now` before its next step is due (ms), by what
+    it has to do (a port without descriptors is NodeLoop's to poll)."""
     for link in node.links.values():
         if len(link.queue) or not link.idle(now):
             return BUSY_MS
     for p in ports:
         pending = getattr(p, "pending", None)
         if pending is not None and pending():
-            return BUSY_MS
-        if p.filenos() is None:
             return BUSY_MS
     t = node.transport
     if t is not None and t.pending():
@@ -66,8 +65,8 @@ class NodeLoop:
         self.steps = 0
         self.step_errors = 0
         self._loop: Optional[asyncio.AbstractEventLoop] = None
-        self._fds: Dict[int, Any] = {}
-        self._held: Dict[int, bool] = {}
+        self._fds: Set[int] = set()  # descriptors with a reader on the loop
+        self._held: Set[int] = set()  # readers resting until the next timed step (_readable)
         self._timer: Optional[asyncio.TimerHandle] = None
         self._soon = False
         self._reported: Set[type] = set()
@@ -118,8 +117,8 @@ class NodeLoop:
             again = True  # closed under us: the next sync drops it
         if again:
             self._loop.remove_reader(fd)
-            del self._fds[fd]
-            self._held[fd] = True
+            self._fds.discard(fd)
+            self._held.add(fd)
             self._arm(BUSY_MS)
 
     def _step(self) -> None:
@@ -139,7 +138,8 @@ class NodeLoop:
             self.step_errors += 1
             self._report(e)
             wait = BUSY_MS
-        self._sync_readers()
+        if self._sync_readers():
+            wait = min(wait, BUSY_MS)  # a port the loop cannot wait on is polled
         self._arm(wait)
 
     def _report(self, e: BaseException) -> None:
@@ -167,25 +167,27 @@ class NodeLoop:
         self._held.clear()
         self._step()
 
-    def _sync_readers(self) -> None:
+    def _sync_readers(self) -> bool:
         # the descriptors come and go (a TCP modem reconnects, a client
-        # joins a server): register what the ports name now
+        # joins a server): register what the ports name now; -> whether a
+        # port has none at all (filenos() None: polled)
         loop = self._loop
         assert loop is not None
-        want: Dict[int, Any] = {}
+        want: Set[int] = set()
+        polled = False
         for p in self.ports:
             fds = p.filenos()
-            if fds:
-                for fd in fds:
-                    want[fd] = p
-        for fd in list(self._fds):
-            if fd not in want:
-                loop.remove_reader(fd)
-                del self._fds[fd]
-        for fd in want:
-            if fd not in self._fds and fd not in self._held:
-                loop.add_reader(fd, self._readable, fd)
-                self._fds[fd] = want[fd]
+            if fds is None:
+                polled = True
+            else:
+                want.update(fds)
+        for fd in self._fds - want:
+            loop.remove_reader(fd)
+            self._fds.discard(fd)
+        for fd in want - self._fds - self._held:
+            loop.add_reader(fd, self._readable, fd)
+            self._fds.add(fd)
+        return polled
 
 
 async def run_nodes(nodes: Sequence[Any], seconds: Optional[float] = None,

@@ -44,7 +44,9 @@ class Status:
     @property
     def elapsed_s(self) -> float:
         """Seconds from the request to its final status (so far, while it runs)."""
-        return self.times.get(self.name, time.monotonic() - self.started) if self.final else time.monotonic() - self.started
+        if self.final:
+            return self.times[self.name]
+        return time.monotonic() - self.started
 
     def _update(self, code: int, reason: str) -> None:
         self.code = code

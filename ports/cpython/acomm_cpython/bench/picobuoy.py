@@ -51,6 +51,7 @@ import time
 from ..emulate import modemtaps as mt
 from ..emulate.capture import read_capture
 from ..board.picoboard import PicoBoard, PicoError, firmware, runner_available
+from ..board.procs import die_with_parent
 
 BUOY, DIVER, SHORE = 1, 2, 3
 READY = {"buoy": b"acomm buoy: node 1", "diver": b"acomm diver: node 2"}
@@ -76,16 +77,6 @@ def missing():
 def _acomm():
     exe = os.path.join(os.path.dirname(sys.executable), "acomm")
     return [exe] if os.access(exe, os.X_OK) else [sys.executable, "-m", "acomm_cpython.cli"]
-
-
-def _die_with_parent():
-    # the emulators and shore go when the run's process dies, even by SIGKILL
-    try:
-        import ctypes
-
-        ctypes.CDLL(None, use_errno=True).prctl(1, 9)  # PR_SET_PDEATHSIG, SIGKILL
-    except (OSError, AttributeError):
-        pass
 
 
 def diver_board(boards_dir, period_s):
@@ -150,7 +141,7 @@ class Run:
         """A CLI process (its output in DIR/name.out); waits for its first `lines` lines."""
         out = open(self.path(name + ".out"), "w+")
         p = subprocess.Popen(_acomm() + args, stdin=subprocess.PIPE, stdout=out, stderr=subprocess.STDOUT,
-                             text=True, preexec_fn=_die_with_parent)
+                             text=True, preexec_fn=die_with_parent)
         self.procs.append((p, out))
         end = time.monotonic() + 30
         while True:

@@ -31,6 +31,7 @@ import threading
 import time
 
 from .boardfiles import repo_root
+from .procs import die_with_parent
 
 BOOTROM_NAME = "rp2040-bootrom-b1.bin"
 START_TIMEOUT_S = 20
@@ -40,17 +41,6 @@ CTL_TIMEOUT_S = 30
 
 class PicoError(Exception):
     pass
-
-
-def _die_with_parent():
-    # node and socat are killed when the process that started them dies, even
-    # by SIGKILL (a test runner's timeout): an orphaned board holds a core
-    try:
-        import ctypes
-
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
 
 
 def runner_dir():
@@ -125,7 +115,7 @@ class PicoBoard:
             self.args += ["--speed-cap", str(speed_cap)]
         # stderr goes to a file: a pipe nobody reads could fill and stop the board
         self.proc = subprocess.Popen(self.args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                     stderr=self._err, preexec_fn=_die_with_parent)
+                                     stderr=self._err, preexec_fn=die_with_parent)
         try:
             self.ports = self._ready()
             if ptys:
@@ -157,7 +147,7 @@ class PicoBoard:
         link = os.path.join(self._dir, name)
         p = subprocess.Popen(["socat", "pty,link=%s,raw,echo=0" % link, "tcp:%s:%d" % (self.host, self.ports[name])],
                              stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                             preexec_fn=_die_with_parent)
+                             preexec_fn=die_with_parent)
         self._socats.append(p)
         end = time.monotonic() + PTY_TIMEOUT_S
         while not os.path.exists(link):

@@ -21,6 +21,7 @@ import subprocess
 import time
 
 from .boardfiles import repo_root
+from .procs import die_with_parent
 
 HEAP_WORD = 0x21FFFFF8
 HEAP_MAGIC = 0x48454150
@@ -32,18 +33,6 @@ START_GRACE_S = 0.3
 
 class QemuError(Exception):
     pass
-
-
-def _die_with_parent():
-    # qemu is killed when the process that started it dies, even by SIGKILL
-    # (a test runner's timeout): an orphaned board would hold a core for ever
-    try:
-        import ctypes
-        import signal
-
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
 
 
 def firmware(name):
@@ -76,7 +65,7 @@ class QemuBoard:
         self.args = qemu_args(elf, heap, rom, flash=flash)
         self._t = None
         self.proc = subprocess.Popen(self.args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE, preexec_fn=_die_with_parent)
+                                     stderr=subprocess.PIPE, preexec_fn=die_with_parent)
         self.port = self._pty()
 
     def _pty(self):
