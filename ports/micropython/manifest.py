@@ -28,6 +28,7 @@ package(
         "catalog/__init__.py",
         "catalog/caddy.py",
         "catalog/rendezvous.py",
+        "catalog/rovcontrol.py",
         "catalog/seaware.py",
         "catalog/teleop.py",
         "codec/__init__.py",
