@@ -8,8 +8,11 @@
 # teleop.py: the buoy freezes teleop and pays heap for every Message it
 # builds at import; this catalog is built only where a vehicle is piloted.
 #
-# Commands move a vehicle, so they travel sealed (acomm.link.guard: GUARD
-# below claims thrust, heartbeat and command). Each carries a 4-bit tag
+# On a half-duplex channel the vehicle speaks when asked: the topside polls
+# (a command with cmd CMD_POLL, which also carries the keep-alive's seq) and
+# holds its sticks for the answer, a state. Commands move a vehicle, so
+# they travel sealed (guard_check below claims thrust, heartbeat and
+# command). Each carries a 4-bit tag
 # (1..15, 0 is "none"); the vehicle answers in its next state message with
 # the tag and a result, the MAV_RESULT codes of MAVLink (0 accepted,
 # 1 temporarily rejected, 2 denied, 3 unsupported, 4 failed, 5 in progress,
@@ -27,6 +30,7 @@ from . import teleop
 CMD_DISARM = const(0)
 CMD_ARM = const(1)
 CMD_MODE = const(2)
+CMD_POLL = const(3)  # "send your state now"; mode carries the last thrust seq, so it is a keep-alive too
 TAGS = const(16)  # tag values; 0 means none
 NO_ANSWER = const(7)  # the result when the autopilot never acknowledged
 

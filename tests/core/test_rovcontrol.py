@@ -39,6 +39,7 @@ def test_sizes_and_values():
 def test_guard_claims_sticks_keepalives_and_commands_not_state():
     assert R.guard_check(R.CATALOG.pack([("command", {"cmd": 1, "force": 0, "mode": 0, "tag": 1})]))
     assert R.guard_check(R.CATALOG.pack([("heartbeat", {"seq": 1})]))
+    assert R.guard_check(R.CATALOG.pack([("command", {"cmd": R.CMD_POLL, "force": 0, "mode": 9, "tag": 0})]))
     assert R.guard_check(T.CATALOG.pack([("thrust", T.thrust_values(T.NEUTRAL, 1))]))
     assert not R.guard_check(R.CATALOG.pack([("state", STATE)]))
     assert not R.guard_check(b"")

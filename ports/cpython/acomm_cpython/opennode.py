@@ -24,7 +24,9 @@ class open_node:
     none. udp_peers: static UDP peers, id -> "HOST:PORT"; multicast=False: the UDP link announces
     itself neither by multicast nor by broadcast (static and learnt peers only).
     driver_options go to the modems' drivers, link_options to every link. ModemSpecError for
-    a bad modem text, ModemError when a modem cannot be opened or does not start in time."""
+    a bad modem text, ModemError when a modem cannot be opened or does not start in time.
+    guard: what needs a valid tag with the key (an acomm.link.guard.Guard; default
+    acomm.apps.policy.commands(), the seed catalogs' commands)."""
 
     def __init__(self, name: str, node_id: int, modems: Sequence[str] = (), udp: Optional[str] = None,
                  tcp_listen: Optional[str] = None, tcp_connect: Optional[str] = None,
@@ -32,12 +34,12 @@ class open_node:
                  store: Optional[str] = None, transport: bool = True,
                  driver_options: Optional[Mapping[str, Any]] = None, link_options: Optional[Mapping[str, Any]] = None,
                  startup_timeout_s: float = 15.0, udp_peers: Optional[Mapping[int, str]] = None,
-                 multicast: bool = True) -> None:
+                 multicast: bool = True, guard: Optional[Any] = None) -> None:
         self._args: Dict[str, Any] = dict(name=name, node_id=node_id, modems=list(modems), udp=udp, tcp_listen=tcp_listen,
                           tcp_connect=tcp_connect, known=dict(known or {}), key_file=key_file, store=store,
                           transport=transport, driver_options=dict(driver_options or {}),
                           link_options=dict(link_options or {}), udp_peers=dict(udp_peers or {}),
-                          multicast=multicast)
+                          multicast=multicast, guard=guard)
         self._timeout = startup_timeout_s
         self._node: Optional[AsyncNode] = None
 
@@ -61,7 +63,8 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
                known: Optional[Mapping[str, int]] = None, key_file: Optional[str] = None,
                store: Optional[str] = None, transport: bool = True,
                driver_options: Optional[Mapping[str, Any]] = None, link_options: Optional[Mapping[str, Any]] = None,
-               udp_peers: Optional[Mapping[int, str]] = None, multicast: bool = True) -> AsyncNode:
+               udp_peers: Optional[Mapping[int, str]] = None, multicast: bool = True,
+               guard: Optional[Any] = None) -> AsyncNode:
     """The AsyncNode open_node starts, not yet started (links opened, nothing stepped)."""
     from .modems import add_modem_link, hostport, load_key
 
@@ -78,7 +81,7 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
             from acomm.apps.policy import commands
             from acomm.frame.auth import Auth
 
-            core.set_auth(Auth(load_key(key_file)), commands())
+            core.set_auth(Auth(load_key(key_file)), guard if guard is not None else commands())
         for spec in modems:
             lname, stream, watch = add_modem_link(core, spec, options=dict(driver_options or {}), **lopts)
             closers.append(stream)

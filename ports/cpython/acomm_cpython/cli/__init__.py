@@ -15,7 +15,8 @@ import sys
 # name -> (module of this package, one line of help), in the order --help lists them
 COMMANDS = {
     "bench": ("bench", "run a benchmark; prints JSON lines with --json"),
-    "bridge": ("bridge", "a gateway to another protocol: 'bridge imc' speaks IMC over UDP (DUNE, Neptus)"),
+    "bridge": ("bridge", "a gateway to another protocol: 'bridge imc' speaks IMC over UDP (DUNE, Neptus), "
+                          "'bridge mavlink' MAVLink to an ArduSub vehicle and its ground station"),
     "demo": ("demo", "run the demonstration mission on the simulated ocean"),
     "emulate": ("emulate", "an emulated modem on a pseudo-terminal (and TCP)"),
     "flash": ("flash", "copy a board's program (boards/NAME) to a MicroPython board with mpremote"),

@@ -1,3 +1,4 @@
+# `acomm bridge mavlink`: cli/bridgemav.py.
 # `acomm bridge imc`: the IMC gateway on the command line (docs/imc.md,
 # "Gateway"). Either a simulated network (--sim: every simulated node is an
 # IMC system with its own UDP port, run in real time or --speed times
@@ -20,8 +21,17 @@ from ..bridges.imcnodes import build_real, build_sim, gateways
 from ..modems import ModemError, interrupt
 
 
-def add_arguments(p):
-    p.add_argument("protocol", choices=["imc"], help="the protocol to bridge to (IMC: LSTS DUNE/Neptus)")
+def add_arguments(parser):
+    sub = parser.add_subparsers(dest="protocol", required=True, metavar="PROTOCOL")
+    p = sub.add_parser("imc", help="IMC over UDP: LSTS DUNE and Neptus (docs/imc.md)")
+    _imc_arguments(p)
+    from .bridgemav import add_arguments as mavlink_arguments
+
+    mavlink_arguments(sub.add_parser("mavlink", help="MAVLink at both ends of an acoustic link: a GCS's joystick "
+                                                     "drives an ArduSub vehicle (docs/mavlink.md)"))
+
+
+def _imc_arguments(p):
     p.add_argument("--port", type=int, default=DATA_PORT,
                    help="UDP port of the (first) system, trying 5 from there as DUNE does; 0: any (default %(default)s)")
     p.add_argument("--host", default="0.0.0.0", help="address the UDP sockets bind to")
@@ -56,6 +66,10 @@ def add_arguments(p):
 
 
 def main(args):
+    if args.protocol == "mavlink":
+        from .bridgemav import main as mavlink_main
+
+        return mavlink_main(args)
     try:
         nodes, advance, world = build_sim(args) if args.sim else build_real(args)
     except ModemError as e:

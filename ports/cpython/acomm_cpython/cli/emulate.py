@@ -1,6 +1,8 @@
 # `acomm emulate <modem> --link PATH`: the front end of the emulator host
 # (acomm_cpython.emulate.host): an emulated modem on a pseudo-terminal, its
-# peers, TCP and --log; it runs until SIGTERM or Ctrl-C.
+# peers, TCP and --log; it runs until SIGTERM or Ctrl-C. SIGUSR1 fills the
+# water with noise (every packet lost) and SIGUSR2 quiets it, for drills
+# of a lost link (docs/mavlink.md).
 import signal
 import sys
 
@@ -68,6 +70,14 @@ def main(args):
 
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
+
+    def noise(on):
+        # SIGUSR1: noise in the water, every packet lost; SIGUSR2: quiet again
+        host.medium.loss = 1.0 if on else args.loss
+        print("water: %s" % ("noise, every packet lost" if on else "quiet, loss %g" % args.loss), flush=True)
+
+    signal.signal(signal.SIGUSR1, lambda *_: noise(True))
+    signal.signal(signal.SIGUSR2, lambda *_: noise(False))
     for st in host.stations:
         where = "%s -> %s" % (st.pty.link, st.pty.device) if st.pty and st.pty.link else "headless"
         if st.tcp:
