@@ -48,6 +48,9 @@ BENCHES = {
     # a topside node's idle CPU and how soon a frame's bytes reach its
     # driver: the event loop against the 5 ms polling loop before it
     "node": "node_workload",
+    # seed 004's teleoperation through `acomm bridge mavlink`: a GCS's stick
+    # to an autopilot over the seed's modems (simulated) and emulated SeaTracs
+    "mavlink": "mavlink_workload",
 }
 NOT_IN_ALL = ("compare", "soak", "attack", "sweep", "board")
 

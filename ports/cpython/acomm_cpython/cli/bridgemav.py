@@ -46,7 +46,7 @@ def add_arguments(p):
     p.add_argument("--startup-timeout", type=float, default=15.0, metavar="S")
     v = p.add_argument_group("vehicle side")
     v.add_argument("--failsafe-timeout", type=float, metavar="S",
-                   help="neutral sticks when nothing valid arrived for this long (default 5, 10 on a SeaTrac)")
+                   help="neutral sticks when nothing valid arrived for this long (default 7.5, 10 on a SeaTrac)")
     v.add_argument("--failsafe-action", default="neutral", choices=["neutral", "hold", "surface", "disarm"],
                    help="what else to do when the failsafe trips (hold: ALT_HOLD mode)")
     v.add_argument("--manual-hz", type=float, default=10.0, help="MANUAL_CONTROL rate to the autopilot (default 10)")
@@ -57,11 +57,11 @@ def add_arguments(p):
     t.add_argument("--threshold", type=float, default=0.1,
                    help="send sticks when an axis moved more than this (of full scale; default 0.1)")
     t.add_argument("--keepalive", type=float, metavar="S",
-                   help="keep-alive period (default 2; 4 on a SeaTrac, whose packets take over a second)")
+                   help="keep-alive period (default 3; 4 on a SeaTrac, whose packets take over a second)")
     t.add_argument("--poll", type=float, default=10.0, metavar="S",
                    help="ask the vehicle for its state this often (default 10)")
     t.add_argument("--reply-wait", type=float, metavar="S",
-                   help="after a poll or command, sticks wait this long for the answer (default 1, 2.5 on a SeaTrac)")
+                   help="after a poll or command, sticks wait this long for the answer (default 2, 2.5 on a SeaTrac)")
     t.add_argument("--stick-gap", type=float, default=0.5, metavar="S",
                    help="at least this long between stick messages (default 0.5)")
     t.add_argument("--stale", type=float, default=25.0, metavar="S",
@@ -93,7 +93,7 @@ def link_defaults(modems):
     1.3 to 2 s (100 bit/s), so its keep-alive must leave room for the vehicle's answers."""
     if any(m.split(":", 1)[0] == "seatrac" for m in modems):
         return 4.0, 10.0, 2.5
-    return 2.0, 5.0, 1.0
+    return 3.0, 7.5, 2.0  # a 200 bit/s modem's poll and state (docs/mavlink.md has the rule)
 
 
 def main(args):
