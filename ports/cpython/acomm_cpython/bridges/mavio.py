@@ -42,6 +42,10 @@ def parse_url(url: str) -> Tuple[str, str, int]:
     host, sep, port = rest.rpartition(":")
     if not sep or not port.isdigit():
         raise ValueError("MAVLink connection %r: no port" % url)
+    # checked here, not left to bind or connect: their OverflowError is no
+    # ValueError, and the CLI would end in a traceback instead of a message
+    if int(port) > 65535:
+        raise ValueError("MAVLink connection %r: port beyond 65535" % url)
     return kind, host or "0.0.0.0", int(port)
 
 

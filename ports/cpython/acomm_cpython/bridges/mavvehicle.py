@@ -37,6 +37,10 @@ ACTIONS = {"neutral": None, "hold": ("mode", MAV.SUB_MODE_ALT_HOLD), "surface": 
            "disarm": ("disarm", 0)}
 FORCE_MAGIC = 21196  # COMPONENT_ARM_DISARM's param2 that skips the arming checks
 NO_BATTERY = 101
+# MAVLink's MAV_RESULT_CANCELLED (6), the rovcontrol answer for a command a
+# newer one replaced; the ardupilotmega dialect of pymavlink 2.4.50 has no
+# such name, and a missing one raised AttributeError in acoustic_in
+CANCELLED = getattr(MAV, "MAV_RESULT_CANCELLED", 6)
 
 
 def manual_control(mav: Any, target: int, vector: Tuple[float, ...]) -> Any:
@@ -175,7 +179,7 @@ class VehicleSide:
         for c in self._commands[1:]:
             if c["command"] == cmd:
                 self._commands.remove(c)
-                self._answer(c["tag"], MAV.MAV_RESULT_CANCELLED)
+                self._answer(c["tag"], CANCELLED)
         self._commands.append({"command": cmd, "p1": p1, "p2": p2, "tag": tag, "tries": 0, "sent_at": None,
                                "what": kind if kind != "mode" else "mode %d" % mode})
 
