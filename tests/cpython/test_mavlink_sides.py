@@ -609,8 +609,10 @@ def test_topside_command_without_answer_fails_after_the_timeout():
     assert (v["cmd"], v["force"]) == (R.CMD_DISARM, 1)
     rig.run(19990)
     assert rig.acks() == []
-    # while it waits, the vehicle is asked every command_poll_ms
-    assert [ticks_diff(t, t_cmd) for t, _ in rig.polls()] == [2500, 5500, 8500, 11500, 14500, 17500]
+    # while it waits, the command goes again every command_poll_ms (the same tag: carried out once)
+    again = [(ticks_diff(t, t_cmd), v["tag"]) for t, v, _ in rig.sent("command")][1:]
+    assert [t for t, _ in again] == [3000, 6000, 9000, 12000, 15000, 18000]
+    assert set(tag for _, tag in again) == {v["tag"]} and rig.polls() == []
     rig.run(20)
     (t, a), = rig.acks()
     assert ticks_diff(t, t_cmd) == 20000

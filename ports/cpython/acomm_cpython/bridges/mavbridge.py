@@ -20,9 +20,10 @@ from acomm.catalog import rovcontrol as R
 from acomm.compat import ticks_ms
 from acomm.errors import AcommError
 
-# name -> (priority, lifespan s, link ack): commands first and acknowledged;
-# sticks soon stale; the state is the least urgent
-SENDING = {"command": (2, 20.0, True), "thrust": (3, 3.0, False), "heartbeat": (3, 3.0, False),
+# name -> (priority, lifespan s, link ack): commands first, acknowledged by
+# the vehicle's state (a link ACK's retransmissions would cross that answer
+# on a half-duplex channel); sticks soon stale; the state least urgent
+SENDING = {"command": (2, 5.0, False), "thrust": (3, 3.0, False), "heartbeat": (3, 3.0, False),
            "poll": (3, 3.0, False), "state": (5, 10.0, False)}
 UPLINK = ("thrust", "heartbeat", "poll")  # one at a time: the freshest goes next
 

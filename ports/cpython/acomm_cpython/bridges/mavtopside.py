@@ -19,7 +19,8 @@
 #   it stops for operator_ms the sticks go neutral once and the keep-alive
 #   stops, so the vehicle's failsafe trips as it would for a lost link.
 # - COMMAND_LONG COMPONENT_ARM_DISARM and DO_SET_MODE, and SET_MODE, go on
-#   the water as sealed rovcontrol commands with a tag; the GCS gets its
+#   the water as sealed rovcontrol commands with a tag, sent again every
+#   command_poll_ms until the vehicle's state answers; the GCS gets its
 #   COMMAND_ACK only when the vehicle's state answers that tag, or
 #   MAV_RESULT_FAILED after command_timeout_ms. The GCS's retries of a
 #   waiting command are not sent again. Other commands are answered
@@ -84,7 +85,8 @@ class TopsideSide:
         self._acoustic: List[Tuple[Any, ...]] = []
         self._lines: List[str] = []
         self.stats: Dict[str, int] = {"manual_in": 0, "sticks_sent": 0, "keepalives_sent": 0, "commands_sent": 0,
-                                      "acks": 0, "command_timeouts": 0, "states": 0, "unsealed": 0, "polls": 0}
+                                      "acks": 0, "command_timeouts": 0, "states": 0, "unsealed": 0, "polls": 0,
+                                      "commands_resent": 0}
 
     # -- from the GCS -----------------------------------------------------------------------
     def mavlink_in(self, now: int, msg: Any) -> None:
@@ -127,9 +129,11 @@ class TopsideSide:
                 return  # the GCS retrying the command that waits for the vehicle
             return self._ack(msg, command, MAV.MAV_RESULT_TEMPORARILY_REJECTED)
         self._tag = self._tag % (R.TAGS - 1) + 1
-        self._pending = {"what": what, "tag": self._tag, "command": command, "at": now,
+        values = {"cmd": cmd, "force": int(force), "mode": mode, "tag": self._tag}
+        self._pending = {"what": what, "tag": self._tag, "command": command, "at": now, "values": values,
                          "to": (msg.get_srcSystem(), msg.get_srcComponent())}
-        self._acoustic.append(("command", {"cmd": cmd, "force": int(force), "mode": mode, "tag": self._tag}))
+        self._acoustic.append(("command", values))
+        self._polled_at = now  # a command asks for the state as a poll does
         self.stats["commands_sent"] += 1
 
     def _ack(self, msg: Any, command: int, result: int) -> None:
@@ -202,7 +206,15 @@ class TopsideSide:
                 self.stats["sticks_sent"] += 1
                 return
         since = ticks_diff(now, self._polled_at)
-        if since >= self.poll_ms or self._pending is not None and since >= self.command_poll_ms:
+        if self._pending is not None and since >= self.command_poll_ms:
+            # no answer yet: the command again, which the vehicle carries out
+            # once (its tag) and answers like a poll; no link-level ACK, whose
+            # retransmissions would cross the answer on a half-duplex channel
+            self._polled_at = now
+            self._acoustic.append(("command", self._pending["values"]))
+            self.stats["commands_resent"] += 1
+            return
+        if since >= self.poll_ms:
             self._polled_at = now
             self._acoustic.append(("command", {"cmd": R.CMD_POLL, "force": 0, "mode": self.sender.seq, "tag": 0}))
             self.stats["polls"] += 1

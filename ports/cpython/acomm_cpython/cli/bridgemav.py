@@ -61,7 +61,7 @@ def add_arguments(p):
     t.add_argument("--poll", type=float, default=10.0, metavar="S",
                    help="ask the vehicle for its state this often (default 10)")
     t.add_argument("--reply-wait", type=float, metavar="S",
-                   help="after a poll or command, sticks wait this long for the answer (default 2, 2.5 on a SeaTrac)")
+                   help="after a poll or command, sticks wait this long for the answer (default 2, 3 on a SeaTrac)")
     t.add_argument("--stick-gap", type=float, default=0.5, metavar="S",
                    help="at least this long between stick messages (default 0.5)")
     t.add_argument("--stale", type=float, default=25.0, metavar="S",
@@ -92,7 +92,7 @@ def link_defaults(modems):
     """(keep-alive s, failsafe timeout s, reply wait s) for the links: a SeaTrac's packets take
     1.3 to 2 s (100 bit/s), so its keep-alive must leave room for the vehicle's answers."""
     if any(m.split(":", 1)[0] == "seatrac" for m in modems):
-        return 4.0, 10.0, 2.5
+        return 4.0, 10.0, 3.0
     return 3.0, 7.5, 2.0  # a 200 bit/s modem's poll and state (docs/mavlink.md has the rule)
 
 
@@ -182,7 +182,8 @@ async def _serve(args, vehicle, url, conn, name, node_id, peer, peer_id, emit):
                 side = TopsideSide(endpoint.mav, now, threshold=args.threshold,
                                    keepalive_ms=int(args.keepalive * 1000), stick_gap_ms=int(args.stick_gap * 1000),
                                    stale_ms=int(args.stale * 1000), command_timeout_ms=int(args.command_timeout * 1000),
-                                   reply_ms=int(args.reply_wait * 1000), poll_ms=int(args.poll * 1000))
+                                   reply_ms=int(args.reply_wait * 1000), poll_ms=int(args.poll * 1000),
+                                   command_poll_ms=int(2 * args.reply_wait * 1000))
             runner = BridgeRunner(side, node, conn, endpoint, peer, emit)
             ready = {"event": "ready", "side": "vehicle" if vehicle else "topside", "node": name, "id": node_id,
                      "peer": peer, "mavlink": url, "links": node.links}

@@ -38,6 +38,7 @@ import sys
 import tempfile
 import time
 
+from acomm.catalog import teleop
 from acomm.prng import Prng
 from acomm_sim.channel import Channel
 from acomm_sim.metrics import median
@@ -63,10 +64,12 @@ def _pct(xs, q):
 
 
 def _quantized(v):
-    # the GCS's value -> what the vehicle side sends after the teleop catalog's 1/15 steps
+    # the GCS's value -> what the vehicle side sends, through the teleop catalog's own quantizer
     x, y, z, r, s, t = v
-    q = lambda a: int(round(round(a / 1000.0 * 15) / 15.0 * 1000))  # noqa: E731
-    return (q(x), q(y), 500 + int(round(round((z - 500) / 500.0 * 15) / 15.0 * 500)), q(r), q(s), q(t))
+    d = teleop.thrust_values((x / 1000.0, y / 1000.0, (z - 500) / 500.0, t / 1000.0, s / 1000.0, r / 1000.0), 0)
+    surge, sway, heave, roll, pitch, yaw = teleop.vector_of(d)
+    k = lambda a: int(round(a * 1000))  # noqa: E731
+    return (k(surge), k(sway), 500 + int(round(heave * 500)), k(yaw), k(pitch), k(roll))
 
 
 def _matches(got, want):

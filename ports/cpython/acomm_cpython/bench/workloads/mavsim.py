@@ -46,7 +46,7 @@ class SimBridges:
         self.veh_end = MavEndpoint(GCS_SYSID, GCS_COMPONENT)
         self.ap_end = MavEndpoint(1, AUTOPILOT_COMPONENT)  # the scripted autopilot
         self.topside = TopsideSide(self.top_end.mav, now, keepalive_ms=keepalive_ms, stick_gap_ms=stick_gap_ms,
-                                    reply_ms=reply_ms)
+                                    reply_ms=reply_ms, command_poll_ms=2 * reply_ms)
         self.vehicle = VehicleSide(self.veh_end.mav, now, timeout_ms=timeout_ms)
         self.manual = []
         self.received = []
