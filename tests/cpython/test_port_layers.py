@@ -26,7 +26,7 @@ MAY_IMPORT = {
     "demo": {"library", "acomm_sim", "acomm_web"},
     # acomm_boards: the boards shipped with acomm (package data)
     "board": {"library", "console", "acomm_mp", "acomm_web", "acomm_boards"},
-    "bench": {"library", "board", "demo", "emulate", "acomm_sim", "acomm_web", "acomm_mp"},
+    "bench": {"library", "board", "demo", "emulate", "bridges", "acomm_sim", "acomm_web", "acomm_mp"},
     "cli": {"library", "console", "emulate", "bridges", "demo", "board", "bench", "acomm_sim", "acomm_web", "acomm_mp",
             "acomm_boards"},
 }

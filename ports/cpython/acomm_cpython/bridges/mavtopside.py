@@ -71,8 +71,11 @@ class TopsideSide:
         self._hold_until: Optional[int] = None
         self._polled_at = now
         self.state: Optional[Dict[str, Any]] = None
-        self._state_at = 0
-        self._t0 = now
+        # time since start, accumulated from small tick steps: ticks_diff
+        # spans only 2**29 ms (6.2 days), and a bridge may run longer
+        self._up_ms = 0
+        self._up_at = now
+        self._state_up = 0  # _uptime() when the last state arrived
         self._stick: Optional[Tuple[float, ...]] = None
         self._stick_at: Optional[int] = None  # the GCS's last MANUAL_CONTROL
         self._stick_sent_at: Optional[int] = None
@@ -152,7 +155,7 @@ class TopsideSide:
             if v["failsafe"] and self._operator and self._stick is not None:
                 self.sender.last = None  # the vehicle holds neutral: our stick goes again, with a new seq
             self.state = v
-            self._state_at = now
+            self._state_up = self._uptime(now)
             if self._told_stale:
                 self._told_stale = False
                 self._lines.append("telemetry: fresh again")
@@ -168,6 +171,7 @@ class TopsideSide:
     # -- time -------------------------------------------------------------------------------
     def poll(self, now: int, stick_free: bool = True) -> None:
         """stick_free: no stick message of ours still waits for the modem."""
+        self._uptime(now)
         if self._beat_at is None or ticks_diff(now, self._beat_at) >= 1000:
             self._beat_at = now
             self._second(now)
@@ -241,8 +245,9 @@ class TopsideSide:
                                                    status))
         if st is None:
             return
-        age = ticks_diff(now, self._state_at)
-        self._mav.append(self.mav.named_value_float_encode(self._boot_ms(now), b"TLM_AGE", age / 1000.0))
+        up = self._uptime(now)
+        age = up - self._state_up
+        self._mav.append(self.mav.named_value_float_encode(up & 0xFFFFFFFF, b"TLM_AGE", age / 1000.0))
         if age < self.stale_ms:
             self._telemetry(now)
         else:
@@ -256,7 +261,7 @@ class TopsideSide:
     def _telemetry(self, now: int) -> None:
         st = self.state
         assert st is not None
-        at = self._boot_ms(self._state_at)  # when it arrived, however often it is repeated
+        at = self._state_up & 0xFFFFFFFF  # when it arrived, however often it is repeated
         rad = 0.017453292519943295
         yaw = st["heading"] if st["heading"] <= 180 else st["heading"] - 360.0
         self._mav.append(self.mav.attitude_encode(at, st["roll"] * rad, st["pitch"] * rad, yaw * rad, 0, 0, 0))
@@ -269,8 +274,10 @@ class TopsideSide:
         return self.mav.sys_status_encode(_HEALTH, _HEALTH, _HEALTH if healthy else 0, 0, mv, -1, pct,
                                           0, 0, 0, 0, 0, 0)
 
-    def _boot_ms(self, t: int) -> int:
-        return ticks_diff(t, self._t0) & 0xFFFFFFFF
+    def _uptime(self, now: int) -> int:
+        self._up_ms += ticks_diff(now, self._up_at)
+        self._up_at = now
+        return self._up_ms
 
     def next_ms(self, now: int) -> int:
         return 100
