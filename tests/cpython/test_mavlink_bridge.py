@@ -249,3 +249,31 @@ def test_a_replayed_arm_command_is_refused():
         w.run(3000)
     assert not sb.armed and sb.vehicle.stats["commands"] == 2
     assert veh.node.auth.stats["replayed"] >= 1
+
+
+def _cli(args):
+    return subprocess.run(PY + ["bridge", "mavlink"] + args, capture_output=True, text=True, env=_env(), cwd=ROOT,
+                          timeout=60)
+
+
+def test_the_command_line_refuses_what_would_be_unsafe_or_ambiguous(tmp_path):
+    key = tmp_path / "key"
+    key.write_text(os.urandom(16).hex())
+    key.chmod(0o600)
+    common = ["--udp", "127.0.0.1:0", "--key-file", str(key)]
+    # a GCS port anyone on the network could reach drives the vehicle: only when asked
+    r = _cli(["--gcs", "udpin:0.0.0.0:0"] + common)
+    assert r.returncode == 2 and "--allow-remote-gcs" in r.stderr
+    r = _cli(["--gcs", "udpout:127.0.0.1:14550", "--vehicle", "udpout:127.0.0.1:14551"] + common)
+    assert r.returncode == 2 and "not both" in r.stderr
+    r = _cli(["--vehicle", "udpout:127.0.0.1:14551", "--key-file", str(key)])
+    assert r.returncode == 2 and "--modem" in r.stderr
+    r = _cli(["--vehicle", "bluetooth:x"] + common)
+    assert r.returncode == 2 and "MAVLink connection" in r.stderr
+    r = _cli(["--modem", "seatrac:/dev/ttyUSB0"])  # no key: sticks would be taken on anyone's word
+    assert r.returncode == 2 and "--key-file" in r.stderr
+    # asked for, over a UDP link (a tether): it starts, says ready with the bound port, and stops
+    r = _cli(["--gcs", "udpin:0.0.0.0:0", "--allow-remote-gcs", "--seconds", "1", "--json"] + common)
+    assert r.returncode == 0, r.stderr
+    lines = [json.loads(x) for x in r.stdout.splitlines()]
+    assert lines[0]["event"] == "ready" and lines[0]["mavlink_port"] > 0 and lines[-1]["event"] == "stats"

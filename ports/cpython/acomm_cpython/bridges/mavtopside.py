@@ -15,6 +15,7 @@
 #   keep-alive), never more often than one stick message every stick_gap_ms
 #   and never while the previous one still waits for the modem (the
 #   freshest vector goes next: a queue of old sticks is worse than none).
+#   While the stick is held off neutral the keep-alive repeats it.
 #   Keep-alives flow only while the GCS keeps sending MANUAL_CONTROL; when
 #   it stops for operator_ms the sticks go neutral once and the keep-alive
 #   stops, so the vehicle's failsafe trips as it would for a lost link.
@@ -35,7 +36,7 @@ from acomm.catalog import rovcontrol as R
 from acomm.catalog import teleop
 from acomm.compat import ticks_add, ticks_diff
 
-from .mavwire import MAV
+from .mavwire import MAV, Outbox
 
 _HEALTH = (MAV.MAV_SYS_STATUS_SENSOR_3D_GYRO | MAV.MAV_SYS_STATUS_SENSOR_3D_ACCEL | MAV.MAV_SYS_STATUS_SENSOR_3D_MAG
            | MAV.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | MAV.MAV_SYS_STATUS_SENSOR_BATTERY)
@@ -50,11 +51,12 @@ def stick_vector(msg: Any) -> Tuple[float, ...]:
     return tuple(-1.0 if x < -1.0 else 1.0 if x > 1.0 else x for x in v)
 
 
-class TopsideSide:
+class TopsideSide(Outbox):
     def __init__(self, mav: Any, now: int, threshold: float = 0.1, keepalive_ms: int = 2000,
                  stick_gap_ms: int = 500, operator_ms: int = 1500, stale_ms: int = 25000,
                  command_timeout_ms: int = 20000, reply_ms: int = 1000, poll_ms: int = 10000,
                  command_poll_ms: int = 3000) -> None:
+        Outbox.__init__(self)
         self.mav = mav
         self.sender = teleop.TeleopSender(threshold, keepalive_ms)
         self.stick_gap_ms = stick_gap_ms
@@ -84,9 +86,6 @@ class TopsideSide:
         self._told_stale = False
         self._tag = random.randrange(1, R.TAGS)  # a restarted topside does not reuse its last tag
         self._pending: Optional[Dict[str, Any]] = None
-        self._mav: List[Any] = []
-        self._acoustic: List[Tuple[Any, ...]] = []
-        self._lines: List[str] = []
         self.stats: Dict[str, int] = {"manual_in": 0, "sticks_sent": 0, "keepalives_sent": 0, "commands_sent": 0,
                                       "acks": 0, "command_timeouts": 0, "states": 0, "unsealed": 0, "polls": 0,
                                       "commands_resent": 0}
@@ -226,6 +225,15 @@ class TopsideSide:
         if self._operator:
             hb = self.sender.poll(now)
             if hb is not None:
+                last = self.sender.last
+                if last is not None and any(last):
+                    # a stick held off neutral: the keep-alive is that stick
+                    # again (4 bytes more), so a lost one is made good at the
+                    # next keep-alive, not after a failsafe trip and a poll
+                    values = {"seq": self.sender.seq}
+                    for i in range(6):
+                        values[teleop.AXES[i]] = last[i] / teleop.STEPS
+                    hb = ("thrust", values)
                 self._acoustic.append(hb)
                 self.stats["keepalives_sent"] += 1
 
@@ -282,14 +290,3 @@ class TopsideSide:
     def next_ms(self, now: int) -> int:
         return 100
 
-    def take_mavlink(self) -> List[Any]:
-        out, self._mav = self._mav, []
-        return out
-
-    def take_acoustic(self) -> List[Tuple[Any, ...]]:
-        out, self._acoustic = self._acoustic, []
-        return out
-
-    def take_lines(self) -> List[str]:
-        out, self._lines = self._lines, []
-        return out

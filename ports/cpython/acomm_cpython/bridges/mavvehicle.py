@@ -31,7 +31,7 @@ from acomm.catalog import rovcontrol as R
 from acomm.catalog import teleop
 from acomm.compat import ticks_diff
 
-from .mavwire import AUTOPILOT_COMPONENT, MAV
+from .mavwire import AUTOPILOT_COMPONENT, MAV, Outbox
 
 ACTIONS = {"neutral": None, "hold": ("mode", MAV.SUB_MODE_ALT_HOLD), "surface": ("mode", MAV.SUB_MODE_SURFACE),
            "disarm": ("disarm", 0)}
@@ -53,10 +53,11 @@ def manual_control(mav: Any, target: int, vector: Tuple[float, ...]) -> Any:
                                      enabled_extensions=3, s=int(round(pitch * 1000)), t=int(round(roll * 1000)))
 
 
-class VehicleSide:
+class VehicleSide(Outbox):
     def __init__(self, mav: Any, now: int, timeout_ms: int = 5000, manual_ms: int = 100, action: str = "neutral",
                  telemetry_ms: int = 10000, command_timeout_ms: int = 3000, command_tries: int = 3,
                  lost_ms: int = 3000, slot_ms: int = 300) -> None:
+        Outbox.__init__(self)
         if action not in ACTIONS:
             raise ValueError("failsafe action %r: one of %s" % (action, ", ".join(sorted(ACTIONS))))
         self.mav = mav  # a pymavlink MAVLink: the message builders
@@ -88,9 +89,6 @@ class VehicleSide:
         self._manual_at: Optional[int] = None
         self._commands: List[Dict[str, Any]] = []  # waiting for the autopilot, the first one sent
         self._state_now = False
-        self._mav: List[Any] = []
-        self._acoustic: List[Tuple[Any, ...]] = []
-        self._lines: List[str] = []
         self.stats: Dict[str, int] = {"sticks": 0, "keepalives": 0, "commands": 0, "repeats": 0, "unsealed": 0,
                                       "failsafe_trips": 0, "states_sent": 0, "manual_control": 0,
                                       "polls": 0}
@@ -269,19 +267,6 @@ class VehicleSide:
         left = self.manual_ms - ticks_diff(now, self._manual_at) if self._manual_at is not None else 0
         return max(0, min(left, self.manual_ms))
 
-    # -- what to send ---------------------------------------------------------------------
-    def take_mavlink(self) -> List[Any]:
-        out, self._mav = self._mav, []
-        return out
-
-    def take_acoustic(self) -> List[Tuple[Any, ...]]:
-        """[(message name, values)] for the topside."""
-        out, self._acoustic = self._acoustic, []
-        return out
-
-    def take_lines(self) -> List[str]:
-        out, self._lines = self._lines, []
-        return out
 
 
 def _deg(rad: float) -> float:

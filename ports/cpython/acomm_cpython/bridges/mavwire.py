@@ -9,7 +9,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Tuple
 
 try:
     from pymavlink.dialects.v20 import ardupilotmega as mavlink
@@ -54,3 +54,25 @@ class MavEndpoint:
         self.mav.seq = (self.mav.seq + 1) % 256
         self.stats["tx"] += 1
         return data
+
+
+class Outbox:
+    """What a bridge side wants done, collected until its runner takes it: MAVLink messages for
+    its peer, rovcontrol (name, values) for the water, lines for the user."""
+
+    def __init__(self) -> None:
+        self._mav: List[Any] = []
+        self._acoustic: List[Tuple[Any, ...]] = []
+        self._lines: List[str] = []
+
+    def take_mavlink(self) -> List[Any]:
+        out, self._mav = self._mav, []
+        return out
+
+    def take_acoustic(self) -> List[Tuple[Any, ...]]:
+        out, self._acoustic = self._acoustic, []
+        return out
+
+    def take_lines(self) -> List[str]:
+        out, self._lines = self._lines, []
+        return out
