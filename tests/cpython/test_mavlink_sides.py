@@ -384,6 +384,29 @@ def test_vehicle_poll_gets_exactly_one_state():
     assert rig.side.stats["polls"] == 1
 
 
+def test_vehicle_answers_a_keepalive_only_when_something_discrete_changed():
+    rig = VehicleRig(NEAR_WRAP, slot_ms=300, telemetry_ms=10000)
+    rig.autopilot_heartbeat(armed=False)
+    rig.run(100)
+    rig.acoustic_in(command(R.CMD_POLL, 0, mode=0))
+    rig.run(500)
+    n = len(rig.states)
+    rig.acoustic_in(acoustic("heartbeat", {"seq": 0}))  # nothing new: no answer
+    rig.run(1000)
+    assert len(rig.states) == n
+    rig.autopilot_heartbeat(armed=True)  # armed by the pilot's hand at the vehicle, say
+    rig.run(1000)
+    assert len(rig.states) == n  # not asked: it waits
+    rig.acoustic_in(acoustic("heartbeat", {"seq": 0}))
+    rig.run(500)
+    assert len(rig.states) == n + 1 and rig.states[-1][1]["armed"] == 1
+    # depth alone is no news: it waits for the poll
+    rig.from_autopilot(rig.ap.mav.vfr_hud_encode(0, 0, 90, 0, -30.0, 0))
+    rig.acoustic_in(acoustic("heartbeat", {"seq": 0}))
+    rig.run(500)
+    assert len(rig.states) == n + 1
+
+
 def test_vehicle_failsafe_disarm_action():
     rig = VehicleRig(NEAR_WRAP, timeout_ms=5000, action="disarm")
     rig.autopilot_heartbeat(armed=True)
@@ -824,3 +847,42 @@ def test_listens_beyond_loopback():
         assert not local.listens_beyond_loopback()
     finally:
         local.close()
+
+
+def test_tcp_client_retries_until_a_server_listens_then_carries_bytes():
+    probe = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()  # a port nobody listens on (yet)
+    conn = mavio.open_connection("tcp:127.0.0.1:%d" % port)
+    conn.RETRY_S = 0.05
+    try:
+        fd = conn.fileno()
+        if fd is not None:  # the refused connect settles: readable, then dropped
+            select.select([fd], [], [], 2.0)
+            assert conn.read() == b"" and conn.peer is None
+        conn.write(b"lost")
+        assert conn.dropped >= 1
+        server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        server.bind(("127.0.0.1", port))
+        server.listen(1)
+        server.settimeout(5)
+        c = None
+        for _ in range(100):  # the client tries again on its own when asked for its descriptor
+            if conn.fileno() is None:
+                select.select([], [], [], 0.05)  # between attempts (RETRY_S)
+            else:
+                try:
+                    c, _ = server.accept()
+                    break
+                except socket.timeout:
+                    pass
+        assert c is not None
+        c.sendall(b"\xfe\x09hello")
+        select.select([conn.fileno()], [], [], 2.0)
+        assert conn.read() == b"\xfe\x09hello" and conn.peer is not None
+        c.close()
+        server.close()
+    finally:
+        conn.close()

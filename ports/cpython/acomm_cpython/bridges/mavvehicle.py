@@ -69,8 +69,9 @@ class VehicleSide(Outbox):
         self.lost_ms = lost_ms
         # the half-duplex channel: while the topside talks to us, we speak
         # when asked, within slot_ms after its poll or command (it holds its
-        # sticks for our answer), or after a keep-alive while we hold
-        # neutral (it must learn that, to send its stick again); a topside
+        # sticks for our answer), or after a keep-alive when a flag, the
+        # mode or the armed state changed (it must learn that we hold
+        # neutral, to send its stick again); a topside
         # silent for a failsafe timeout asks nothing, and the state then
         # goes on its own schedule (StateTrigger)
         self.slot_ms = slot_ms
@@ -143,7 +144,11 @@ class VehicleSide(Outbox):
             if name == "thrust" or name == "heartbeat":
                 if self.failsafe.on_message(now, name, v):
                     self.stats["sticks" if name == "thrust" else "keepalives"] += 1
-                if name == "heartbeat" and self.failsafe.tripped:
+                if name == "heartbeat" and (self.failsafe.tripped or self._changed()):
+                    # news the topside must not wait a poll for (we hold
+                    # neutral, the autopilot disarmed or was lost): answer
+                    # its keep-alive, which it does not pause after, so
+                    # only then
                     self._ask(now)
             elif name == "command" and v["cmd"] == R.CMD_POLL:
                 self.failsafe.on_heartbeat(now, v["mode"])  # a poll is a keep-alive too
@@ -162,6 +167,10 @@ class VehicleSide(Outbox):
                     self._command("arm" if v["cmd"] == R.CMD_ARM else "disarm", 0, v["tag"], bool(v["force"]))
                 else:
                     self._answer(v["tag"], MAV.MAV_RESULT_UNSUPPORTED)
+
+    def _changed(self) -> bool:
+        last = self.trigger.last
+        return last is not None and any(self.state[k] != last[k] for k in R.StateTrigger.DISCRETE)
 
     def _ask(self, now: int) -> None:
         self._slot_at = now
