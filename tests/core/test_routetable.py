@@ -1,0 +1,81 @@
+# Learned routes by AODV's rules (acomm.transport.routetable): fresher
+# sequence numbers win, equal ones only when cheaper, invalidation raises
+# the number so stale news cannot restore a broken route, expiry, the
+# bounded table's eviction, across the 2**30 tick wrap.
+
+from acomm.compat import TICKS_MAX, ticks_add
+from acomm.errors import AcommError
+from acomm.transport.routetable import RouteTable, seq_newer
+from checks import raises
+
+T0 = TICKS_MAX - 1000
+LIFE = 30000
+
+
+def test_sequence_numbers_compare_modulo():
+    assert seq_newer(5, 4) and not seq_newer(4, 5) and not seq_newer(4, 4)
+    assert seq_newer(2, 65530) and not seq_newer(65530, 2)  # across the wrap
+    assert seq_newer(0, -1) and not seq_newer(-1, 0) and not seq_newer(-1, -1)
+
+
+def test_fresher_wins_equal_only_when_cheaper_older_never():
+    rt = RouteTable()
+    assert rt.offer(T0, 9, 2, "acoustic", 48, 10, LIFE)
+    assert rt.lookup(T0, 9) == (2, "acoustic", 48)
+    assert not rt.offer(T0, 9, 3, "acoustic", 32, 9, LIFE)  # older, however cheap
+    assert not rt.offer(T0, 9, 3, "acoustic", 48, 10, LIFE)  # as new, not cheaper
+    assert rt.offer(T0, 9, 3, "acoustic", 40, 10, LIFE)  # as new and cheaper
+    assert rt.offer(T0, 9, 4, "satellite", 400, 11, LIFE)  # newer, even if dearer
+    assert rt.lookup(T0, 9) == (4, "satellite", 400)
+    assert not rt.offer(T0, 9, 5, "acoustic", 16, -1, LIFE)  # no number: never over a known one
+
+
+def test_routes_expire_and_the_same_route_heard_again_lives_longer():
+    rt = RouteTable()
+    rt.offer(T0, 7, 2, "acoustic", 16, 1, LIFE)
+    t = ticks_add(T0, LIFE - 10)
+    assert not rt.offer(t, 7, 2, "acoustic", 16, 1, LIFE)  # not news, but it refreshes
+    assert rt.lookup(ticks_add(T0, LIFE + 5000), 7) is not None
+    assert rt.lookup(ticks_add(t, LIFE), 7) is None  # expired
+    assert rt.offer(ticks_add(t, LIFE), 7, 3, "acoustic", 99, 1, LIFE)  # an expired route takes anything as new
+
+
+def test_a_broken_hop_invalidates_its_routes_and_stale_news_cannot_restore_them():
+    rt = RouteTable()
+    rt.offer(T0, 7, 2, "acoustic", 16, 4, LIFE)
+    rt.offer(T0, 8, 2, "acoustic", 32, 65535, LIFE)
+    rt.offer(T0, 9, 3, "acoustic", 16, 1, LIFE)
+    rt.offer(T0, 10, 2, "satellite", 16, 1, LIFE)
+    lost = rt.invalidate(T0, 2, "acoustic")
+    assert sorted(lost) == [(7, 5), (8, 0)]  # numbers raised by one, modulo
+    assert rt.lookup(T0, 7) is None and rt.lookup(T0, 9) is not None and rt.lookup(T0, 10) is not None
+    assert not rt.offer(T0, 7, 2, "acoustic", 16, 4, LIFE)  # the news from before the break
+    assert rt.offer(T0, 7, 6, "acoustic", 64, 5, LIFE)  # as fresh as the raised number: restores
+    assert rt.invalidate(T0, 2, "acoustic") == []  # nothing live through it any more
+
+
+def test_the_table_is_bounded_dead_routes_go_first():
+    rt = RouteTable(capacity=3, keep_ms=20000)
+    for d in (1, 2, 3):
+        rt.offer(T0, d, 50, "acoustic", 16, 1, LIFE)
+    assert not rt.offer(ticks_add(T0, 100), 4, 50, "acoustic", 16, 1, LIFE)  # all live, all recent
+    assert rt.refused == 1
+    rt.invalidate(T0, 50)
+    rt.offer(T0, 2, 51, "acoustic", 16, 2, LIFE)  # 2 alive again via another hop
+    assert rt.offer(ticks_add(T0, 200), 4, 50, "acoustic", 16, 1, LIFE)
+    assert 2 in rt.routes and 4 in rt.routes and len(rt.routes) == 3
+    # all live: the one used longest ago goes, once it is older than keep_ms
+    t = ticks_add(T0, 30000)
+    rt2 = RouteTable(capacity=2, keep_ms=20000)
+    rt2.offer(T0, 1, 9, "acoustic", 16, 1, 10 ** 6)
+    rt2.offer(T0, 2, 9, "acoustic", 16, 1, 10 ** 6)
+    rt2.lookup(ticks_add(T0, 25000), 2)
+    assert rt2.offer(t, 3, 9, "acoustic", 16, 1, 10 ** 6)
+    assert sorted(rt2.routes) == [2, 3]
+
+
+def test_bad_offers_raise():
+    rt = RouteTable()
+    assert raises(AcommError, rt.offer, T0, 255, 1, "acoustic", 16, 1, LIFE)
+    assert raises(AcommError, rt.offer, T0, 5, 1, "acoustic", -1, 1, LIFE)
+    assert raises(AcommError, rt.offer, T0, 5, 1, "acoustic", 16, 70000, LIFE)
