@@ -8,7 +8,7 @@
 # A route: destination -> (next hop, link, cost, destination sequence
 # number, expiry). An offer replaces what is there when
 #   - there is no route, or it expired or was invalidated, or
-#   - the offer's sequence number is newer (modulo 2^16, RFC 1982 style), or
+#   - the offer's sequence number is newer (modulo 65,535, RFC 1982 style), or
 #   - it is as new and cheaper.
 # An older sequence number never wins: that is what keeps routes free of
 # loops when nodes learn from stale replies. Costs are integers: the sum
@@ -26,8 +26,9 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError
 
-SEQ_MOD = const(65536)
-_HALF = const(32768)
+# numbers 0..65534: 0xFFFF is "unknown" on the water (acomm.transport.routewire)
+SEQ_MOD = const(65535)
+_HALF = const(32767)
 
 # entry fields
 NEXT = const(0)  # next hop's node id
@@ -40,7 +41,7 @@ USED = const(6)  # ticks last looked up or refreshed
 
 
 def seq_newer(a, b):
-    """True when sequence number a is newer than b (modulo 2^16; -1 is older than any)."""
+    """True when sequence number a is newer than b (modulo SEQ_MOD; -1 is older than any)."""
     if b < 0:
         return a >= 0
     if a < 0:

@@ -106,6 +106,7 @@ package(
         "transport/packetstore.py",
         "transport/route.py",
         "transport/routetable.py",
+        "transport/routewire.py",
         "transport/segment.py",
         "transport/store.py",
     ],

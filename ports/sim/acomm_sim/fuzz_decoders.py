@@ -294,8 +294,35 @@ def _auth_target():
     return Target("auth", corpus, run)
 
 
+def _route_target():
+    # route control (acomm.transport.routewire): what decodes encodes back to the same bytes
+    from acomm.transport import routewire as W
+
+    rng = Prng(136)
+    corpus = []
+    for _ in range(8):
+        corpus.append(W.encode_request(rng.below(256), rng.below(255), rng.below(65535), rng.below(255),
+                                       rng.below(65536), rng.below(64), rng.below(70000)))
+        corpus.append(W.encode_reply(rng.below(255), rng.below(65535), rng.below(255), rng.below(64),
+                                     rng.below(70000), rng.below(1100000)))
+        corpus.append(W.encode_error([(rng.below(255), rng.below(65535)) for _ in range(rng.range(1, 17))]))
+
+    def run(data, rng):
+        got = W.decode(data)
+        if got[0] == "request":
+            again = W.encode_request(*got[1:])
+        elif got[0] == "reply":
+            again = W.encode_reply(*got[1:])
+        else:
+            again = W.encode_error(got[1])
+        if again != bytes(data):
+            raise Failure("route control %r does not encode back to its bytes" % (got,))
+
+    return Target("route", corpus, run)
+
+
 def targets():
-    out = [_frame_target(), _segment_target()]
+    out = [_frame_target(), _segment_target(), _route_target()]
     from acomm.catalog import MODULES
 
     for m in MODULES:
