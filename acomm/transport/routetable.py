@@ -117,6 +117,17 @@ class RouteTable:
         r = self.routes.get(dest)
         return -1 if r is None else r[SEQ]
 
+    def invalidate_dest(self, now, dest):
+        """dest's route turns invalid (a route error named it). -> (dest, raised seq), or None when
+        there was no live route."""
+        r = self.routes.get(dest)
+        if r is None or not self._live(now, r):
+            return None
+        r[VALID] = False
+        if r[SEQ] >= 0:
+            r[SEQ] = (r[SEQ] + 1) % SEQ_MOD
+        return dest, r[SEQ]
+
     def invalidate(self, now, next_hop, link=None):
         """The hop is gone (on `link`, or on any): its routes turn invalid. -> [(dest, seq)] to
         name in a route error."""

@@ -105,6 +105,7 @@ package(
         "transport/memorystore.py",
         "transport/packetstore.py",
         "transport/route.py",
+        "transport/routefinder.py",
         "transport/routetable.py",
         "transport/routewire.py",
         "transport/segment.py",
