@@ -36,7 +36,7 @@ from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
 from ..prng import Prng
 from . import routewire as W
-from .routetable import SEQ_MOD
+from .routetable import SEQ_MOD, seq_newer
 
 BROADCAST = const(255)
 
@@ -134,7 +134,7 @@ class RouteFinder:
         if hop != origin:
             self.table.offer(now, hop, hop, link, self._cost(now, link, hop), -1, self.lifetime_ms)
         if dest == self.node_id:
-            if dseq != W.UNKNOWN_SEQ and _newer_or_same(dseq, self.seq):
+            if dseq != W.UNKNOWN_SEQ and seq_newer(dseq, self.seq):
                 self.seq = dseq
             self.seq = (self.seq + 1) % SEQ_MOD
             self._out.append((now, link, hop, W.encode_reply(self.node_id, self.seq, origin, 0, 0, self.lifetime_ms)))
@@ -197,7 +197,3 @@ class RouteFinder:
         out, self._events = self._events, []
         return out
 
-
-def _newer_or_same(a, b):
-    d = (a - b) % SEQ_MOD
-    return d < SEQ_MOD // 2

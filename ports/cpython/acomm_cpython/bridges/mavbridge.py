@@ -100,8 +100,7 @@ class BridgeRunner:
             self.stats["acoustic_failed"] += 1
             self._line("not sent: %s" % e)
         else:
-            if hasattr(self.side, "transmitted"):
-                self.side.transmitted(ticks_ms(), name)
+            self.side.transmitted(ticks_ms(), name)
             self.stats["acoustic_sent" if st.ok else "acoustic_failed"] += 1
             if not st.ok:
                 why = "%s: %s" % (st.name, st.reason) if st.reason else st.name
@@ -125,11 +124,7 @@ class BridgeRunner:
 
     def _poll(self) -> int:
         now = ticks_ms()
-        free = self._stick is None or self._stick.done()
-        if hasattr(self.side, "sender"):  # the topside: sticks wait for the modem
-            self.side.poll(now, free)
-        else:
-            self.side.poll(now)
+        self.side.poll(now, self._stick is None or self._stick.done())
         self._flush()
         self._tasks = [t for t in self._tasks if not t.done()]
         self._sync_reader()

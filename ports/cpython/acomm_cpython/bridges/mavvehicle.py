@@ -202,7 +202,8 @@ class VehicleSide(Outbox):
             self._state_now = True
 
     # -- time -----------------------------------------------------------------------------
-    def poll(self, now: int) -> None:
+    def poll(self, now: int, stick_free: bool = True) -> None:
+        """stick_free: the topside's (the runner passes it to either side; sticks are not ours)."""
         fs = self.failsafe
         vector = fs.poll(now)
         for ev in fs.pop_events():

@@ -65,6 +65,10 @@ class Outbox:
         self._acoustic: List[Tuple[Any, ...]] = []
         self._lines: List[str] = []
 
+    def transmitted(self, now: int, name: str) -> None:
+        """The runner: our message `name` has left the modem (its final status). A side that
+        waits for an answer after some messages overrides this."""
+
     def take_mavlink(self) -> List[Any]:
         out, self._mav = self._mav, []
         return out

@@ -117,7 +117,7 @@ def main(args):
         peer, peer_id = keyval(args.peer) if args.peer else (("topside", "1") if vehicle else ("vehicle", "2"))
         peer_id = int(peer_id)
         parse_url(url)
-        from ..bridges.mavwire import GCS_COMPONENT, GCS_SYSID, MavEndpoint  # noqa: F401 (pymavlink present?)
+        from ..bridges import mavwire  # noqa: F401 (ImportError, saying what to install, without pymavlink)
     except ImportError as e:
         print("acomm bridge mavlink: %s" % e, file=sys.stderr)
         return 1

@@ -29,14 +29,14 @@ GCS_PERIOD_MS = 20  # a 50 Hz joystick
 class SimBridges:
     """Both bridges on nodes `top` and `veh` (acomm_sim SimNodes) of world `w`; stick(now) -> the GCS's
     (x, y, z, r, s, t) at that time. Records: manual (t, (x, y, z, r, s, t)) at the autopilot,
-    received (t) of acoustic packets at the vehicle, bytes_sent (t, bytes on the water) by the topside."""
+    received (t) of acoustic packets at the vehicle, uplink (packet, airtime ms) of every packet the
+    topside's modem put on the water (frames with header and authentication trailer)."""
 
     def __init__(self, w, top, veh, stick, keepalive_ms=2000, timeout_ms=5000, stick_gap_ms=500,
-                 reply_ms=1000, overhead=0):
+                 reply_ms=1000):
         self.w = w
         self.top, self.veh = top, veh
         self.stick = stick
-        self.overhead = overhead  # the modem's own framing bytes per packet
         guard = Guard(commands().checks + (R.guard_check,))
         for sn in (top, veh):
             sn.node.set_auth(Auth(KEY), guard)
@@ -50,8 +50,15 @@ class SimBridges:
         self.vehicle = VehicleSide(self.veh_end.mav, now, timeout_ms=timeout_ms)
         self.manual = []
         self.received = []
-        self.bytes_sent = []
-        self.acks = []
+        self.uplink = []
+        transmit = w.channel.transmit
+
+        def tap(now, src, packet, airtime_ms):
+            if src == top.address:
+                self.uplink.append((packet, airtime_ms))
+            return transmit(now, src, packet, airtime_ms)
+
+        w.channel.transmit = tap
         self.armed = False
         self._stick_rid = None
         self._names = {}  # request id -> message name, of the topside's sends
@@ -130,14 +137,13 @@ class SimBridges:
                 self._names[rid] = k
                 if k in UPLINK:
                     self._stick_rid = rid
-                self.bytes_sent.append((now, name, len(data)))
             self.w.wake(sn)
 
     def poll(self, now):
         """The World's task: every 10 ms."""
         self._gcs(now)
         self.topside.poll(now, self._stick_rid is None)
-        self.top_end_out = self.topside.take_mavlink()  # to the GCS: nothing reads it here
+        self.topside.take_mavlink()  # to the GCS: nothing reads it here
         self._send(self.top, "vehicle", self.topside, now)
         self.vehicle.poll(now)
         to_ap = [self.ap_end.feed(self.veh_end.encode(m)) for m in self.vehicle.take_mavlink()]
