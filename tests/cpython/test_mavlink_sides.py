@@ -6,6 +6,7 @@
 # through real pymavlink bytes (encode, then another endpoint's feed), and
 # every acoustic message through the rovcontrol catalog's pack and unpack.
 # Skipped when pymavlink (the `mavlink` extra) is not installed.
+import asyncio
 import math
 import select
 import socket
@@ -886,3 +887,45 @@ def test_tcp_client_retries_until_a_server_listens_then_carries_bytes():
         server.close()
     finally:
         conn.close()
+
+
+class _QuietNode:
+    # what BridgeRunner asks of an AsyncNode, with nothing ever arriving acoustically
+    class core:
+        listen = unlisten = staticmethod(lambda fn: None)
+
+    async def messages(self):
+        await asyncio.Event().wait()
+        yield  # pragma: no cover
+
+    async def send(self, *args):
+        await asyncio.Event().wait()  # the modem never finishes: the poll stays in flight
+
+
+def test_runner_stop_ends_run_while_datagrams_keep_waking_it():
+    # SIGTERM calls stop(): the run must end even while the wake event fires with every
+    # datagram (Task.cancel() could be dropped there by Python 3.11's wait_for)
+    from acomm_cpython.bridges.mavbridge import BridgeRunner
+
+    async def main():
+        listen = mavio.open_connection("udpin:127.0.0.1:0")
+        out = mavio.open_connection("udpout:127.0.0.1:%d" % listen.port)
+        end = MavEndpoint(1, AUTOPILOT_COMPONENT)
+        gcs = MavEndpoint(GCS_SYSID, GCS_COMPONENT)
+        hb = gcs.encode(gcs.mav.heartbeat_encode(MAV.MAV_TYPE_GCS, MAV.MAV_AUTOPILOT_INVALID, 0, 0, 4))
+        runner = BridgeRunner(TopsideSide(end.mav, 0), _QuietNode(), listen, end, "veh", lambda d: None)
+        task = asyncio.get_running_loop().create_task(runner.run())
+        try:
+            for i in range(400):
+                out.write(hb)
+                if i == 200:
+                    runner.stop()
+                await asyncio.sleep(0.001)
+            await asyncio.wait_for(task, 2.0)
+            assert task.done() and end.stats["rx"] > 100  # the datagrams were read and woke it
+        finally:
+            task.cancel()
+            listen.close()
+            out.close()
+
+    asyncio.run(main())

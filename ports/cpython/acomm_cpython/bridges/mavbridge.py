@@ -49,6 +49,7 @@ class BridgeRunner:
                                       "acoustic_undecodable": 0, "acoustic_other_source": 0, "refused": 0}
         self.failures: Dict[str, int] = {}  # acoustic sends that did not go out, by status and reason
         self._wake = asyncio.Event()
+        self._stopping = False
 
     def _line(self, text: str) -> None:
         self.emit({"event": "bridge", "text": text})
@@ -130,14 +131,21 @@ class BridgeRunner:
         self._sync_reader()
         return int(self.side.next_ms(now))
 
+    def stop(self) -> None:
+        """Ends run() at its next turn. A flag, not Task.cancel(): before Python 3.12,
+        asyncio.wait_for drops a cancel that lands as the awaited event fires, and this
+        loop's event fires with every MAVLink datagram."""
+        self._stopping = True
+        self._wake.set()
+
     async def run(self, seconds: Optional[float] = None) -> None:
-        """Until cancelled, or for `seconds`."""
+        """Until stop() or cancellation, or for `seconds`."""
         loop = asyncio.get_running_loop()
         end = None if seconds is None else loop.time() + seconds
         self.node.core.listen(self._on_event)
         rx = loop.create_task(self._acoustic())
         try:
-            while end is None or loop.time() < end:
+            while not self._stopping and (end is None or loop.time() < end):
                 wait = min(self._poll(), 100) / 1000.0
                 if end is not None:
                     wait = max(0.0, min(wait, end - loop.time()))

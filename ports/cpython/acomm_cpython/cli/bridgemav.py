@@ -193,7 +193,7 @@ async def _serve(args, vehicle, url, conn, name, node_id, peer, peer_id, emit):
             task = asyncio.get_running_loop().create_task(runner.run(args.seconds))
             loop = asyncio.get_running_loop()
             for sig in (signal.SIGINT, signal.SIGTERM):
-                loop.add_signal_handler(sig, task.cancel)
+                loop.add_signal_handler(sig, runner.stop)
             try:
                 await task
             except asyncio.CancelledError:
