@@ -19,6 +19,7 @@ from .link.names import NameTable
 # acomm.events' codes, as private constants: inlined, they cost a board no
 # RAM (imported, each took a slot in this module's dict)
 _EV_SEGMENT = const(25)
+_EV_CONTROL = const(29)
 _EV_STATUS = const(20)
 _LINK = const(1)
 _REQ_ID = const(2)
@@ -124,10 +125,15 @@ class Node:
 
     def _on_event(self, ev):
         t = self.transport
+        if t is None and ev[0] == _EV_CONTROL:
+            return  # route control, and no transport to route
         if t is not None:
             code = ev[0]
             if code == _EV_SEGMENT:
                 t.on_segment(self._now, ev[_LINK], ev[_SEG_SRC], ev[_SEG_DST], ev[_SEG_HEAD], ev[_SEG_PAYLOAD], ev[_SEG_AUTHED])
+                return
+            if code == _EV_CONTROL:
+                t.on_control(self._now, ev[_LINK], ev[2], ev[3])
                 return
             if code == _EV_STATUS and t.on_link_status(self._now, ev[_REQ_ID], ev[_STATUS], ev[_REASON]):
                 return

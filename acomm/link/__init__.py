@@ -58,6 +58,7 @@ _RX_SRC = const(1)
 _EV_RECEIVED = const(21)
 _EV_REFUSED = const(28)
 _EV_SEGMENT = const(25)
+_EV_CONTROL = const(29)
 _EV_REPLIED = const(8)
 _EV_RX = const(1)
 _EV_STATUS = const(20)
@@ -102,6 +103,9 @@ class _Inflight:
 
 
 class Link:
+    # acomm.link.neighbours.Neighbours, set by a transport that learns routes: adverts and heard frames feed it
+    neighbours = None
+
     def __init__(
         self,
         name,
@@ -329,6 +333,9 @@ class Link:
     def _heard(self, nid, now, period_ms=None):
         if nid is None or nid == self.node_id:
             return
+        nb = self.neighbours
+        if nb is not None:
+            nb.heard(now, nid, period_ms or 0)
         if self.discovery.heard(nid, now, period_ms) == _AVAILABLE:
             self._emit((_EV_AVAILABILITY, self, self.names.learn(nid), _AVAILABLE))
 
@@ -586,6 +593,11 @@ class Link:
             # the transport's: it numbers and acknowledges its own fragments
             if mine:
                 self._emit((_EV_SEGMENT, self, src, dst, f.seq, f.payload, f.authed))
+            return
+        if f.ftype == fr.CONTROL:
+            # route control (acomm.transport.routing): the transport's too
+            if mine:
+                self._emit((_EV_CONTROL, self, src, f.payload))
             return
         data = f.ftype == fr.DATA or f.ftype == fr.REPLY
         if not mine:

@@ -26,7 +26,7 @@
 
 from ..frame.auth import KEY_CMD
 from ..errors import AcommError
-from ..frame import ACK, ADVERT, REPLY, SEGMENT
+from ..frame import ACK, ADVERT, CONTROL, REPLY, SEGMENT
 
 UNSEALED_RX = 2  # reassemblies unsealed fragments may hold at a time (of the transport's 8)
 _SACK_BIT = 8  # acomm.transport.segment: K, in the frame's sequence field
@@ -45,7 +45,7 @@ class Guard:
 
     def refuses_frame(self, f):
         """Strict mode, an unsealed frame at the link: True (and counted) when
-        it is a control frame (ACK, ADVERT, REPLY, a SACK or a bare poll)."""
+        it is a control frame (ACK, ADVERT, REPLY, route control, a SACK or a bare poll)."""
         t = f.ftype
         if t == ACK:
             kind = "ack"
@@ -53,6 +53,8 @@ class Guard:
             kind = "advert"
         elif t == REPLY:
             kind = "reply"
+        elif t == CONTROL:
+            kind = "route"  # a forged route request, reply or error would steer traffic
         elif t == SEGMENT and f.seq & _SACK_BIT:
             kind = "sack"
         elif t == SEGMENT and len(f.payload) <= 1:

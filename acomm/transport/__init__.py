@@ -116,10 +116,12 @@ def _wall_default():
 
 class Transport:
     def __init__(self, node_id, names, links, next_id, emit, store=None, routes=None, wall=None, max_packet=65536,
-                 compress=True, urgent=4):
+                 compress=True, urgent=4, routing=None):
         """node_id: this node's id; names: its acomm.link.names.NameTable; links: name -> Link (read
         live); next_id(): a fresh link request id; emit(ev): where the transport's events go. store:
-        a packetstore backend (a MemoryStore when None); wall(): the wall clock in seconds (lifespans)."""
+        a packetstore backend (a MemoryStore when None); wall(): the wall clock in seconds (lifespans).
+        routing: None (static routes only), True or a dict of acomm.transport.routing.Routing's
+        options: routes are then learned (static ones still win)."""
         self.node_id = node_id
         self.names = names
         self._next_id = next_id
@@ -133,6 +135,11 @@ class Transport:
             store = MemoryStore()
         self.packets = PacketStore(store, urgent)
         self.router = Router(names, links, routes, urgent)
+        if routing:
+            # imported here: a board that does not route never loads it
+            from .routing import Routing
+
+            self.router.routing = Routing(node_id, names, links, next_id, **(routing if routing is not True else {}))
         self.wall = wall or _wall_default
         self.max_packet = max_packet
         self.compress = compress
@@ -311,7 +318,7 @@ class Transport:
             if ticks_diff(now, p.wait) < 0:
                 return
             p.wait = None
-        r = self.router.choose(p.final, p.size, p.prio, p.medium)
+        r = self.router.choose(p.final, p.size, p.prio, p.medium, now)
         if r is None:
             return
         link, hop = r
@@ -356,6 +363,9 @@ class Transport:
 
     # -- sending -------------------------------------------------------------------
     def poll(self, now):
+        rt = self.router.routing
+        if rt is not None:
+            rt.poll(now)  # route control first: a search's request before the packets that wait for it
         wall = self.wall()
         for p in list(self._out):
             if p not in self._out:
@@ -387,11 +397,17 @@ class Transport:
             # no SACK came: ask again, or elsewhere when the link has stalled
             p.timer = None
             p.misses += 1
+            rt = self.router.routing
+            if rt is not None:
+                rt.attempt(now, p.link, p.hop, False)
             if p.misses >= _STALL_POLLS:
                 p.misses = 0
                 self.router.stall(p.link, p.hop, now)
-                r = self.router.choose(p.final, p.size, p.prio, p.medium)
-                if r is not None and r[0] is not p.link:
+                if rt is not None:
+                    rt.hop_failed(now, p.link, p.hop)
+                r = self.router.choose(p.final, p.size, p.prio, p.medium, now)
+                # elsewhere: another link, or (learning routes) another hop or a search to wait for
+                if (r is not None and (r[0] is not p.link or r[1] != p.hop)) or (r is None and rt is not None):
                     self.stats["failovers"] += 1
                     self._abandon(now, p)
                     return
@@ -428,6 +444,8 @@ class Transport:
         poll = sg.is_poll(head)
         # confirmed by the modem's own delivery report? (acomm.transport.delivery)
         rep = p.out.reports and p.out.report_wanted(len(data), poll)
+        # known before the request: its `queued` (or a refusal) comes from inside request(), and is ours
+        self._reqs[rid] = (None, 0, 0)
         if p.link.request(now, rid, self.names.name_of(p.hop), data, life, p.prio, ack=rep, retries=0,
                           ftype=_SEGMENT, seq=head):
             self._reqs[rid] = (p, index, (_F_POLL if poll else 0) | (_F_REPORTED if rep else 0))
@@ -439,6 +457,9 @@ class Transport:
     def on_link_status(self, now, rid, status, reason):
         # -> True when the request was the transport's
         if self._sack_status(now, rid, status):
+            return True
+        rt = self.router.routing
+        if rt is not None and rt.on_link_status(rid, status >= _TRANSMITTED):
             return True
         r = self._reqs.get(rid)
         if r is None:
@@ -523,6 +544,8 @@ class Transport:
             return
         if p.polled is not None and p.misses == 0:
             self._rtt_sample(p, ticks_diff(now, p.polled))
+        if self.router.routing is not None:
+            self.router.routing.attempt(now, link, src, True)
         p.timer = p.polled = None
         p.misses = 0
         # the answer can come before the link reports the poll sent (a
@@ -554,6 +577,11 @@ class Transport:
     def _rx_poll(self, now):
         for k in [k for k in self._rx if ticks_diff(now, self._rx[k].touched) > _RX_TIMEOUT_MS]:
             del self._rx[k]
+
+    def on_control(self, now, link, src, payload):
+        """A CONTROL frame's payload from neighbour src on link (route control; dropped without routing)."""
+        if self.router.routing is not None:
+            self.router.routing.heard(now, link, src, payload)
 
     def on_segment(self, now, link, src, dst, head, payload, authed=False):
         try:
@@ -649,6 +677,8 @@ class Transport:
             body = blob[h.size :]
             if h.relay is not None:
                 origin, final, prio, life = h.relay
+                if self.router.routing is not None:
+                    self.router.routing.learn(now, link, origin, src)  # the way back, for free
             else:
                 origin, final, prio, life = src, self.node_id, 8, 3600
         except DecodeError:
@@ -730,6 +760,8 @@ class Transport:
         if self._quiet and not tries:
             return
         rid = self._next_id()
+        # known before the request: its `queued` (or a refusal, not tried again) comes from inside request()
+        self._sacks[rid] = (link, src, seg, 2)
         if link.request(now, rid, self.names.name_of(src), seg[1], _SACK_LIFESPAN_S, _SACK_PRIORITY, ftype=_SEGMENT,
                         seq=seg[0]):
             self._sacks[rid] = (link, src, seg, tries)

@@ -19,6 +19,15 @@
 #      carries no adverts, so this only breaks ties).
 # So a nearby node is reached acoustically, for free, and Iridium carries
 # the packet when the acoustic path is gone.
+#
+# With learned routes (`routing`, acomm.transport.routing.Routing; only when
+# the transport was made with routing on, and never for a destination with
+# a static route): on a routing link the hop is the destination when it is
+# heard there, else the learned route's next hop when that route leaves by
+# this link, else the link is no candidate. Next come the links that do
+# not route (satellite: the destination is the hop there). When none of
+# these can carry it, a search starts and the packet waits for it; once the
+# search gives up, a direct try on every link is the fallback (the old rule).
 
 from ..compat import const, ticks_diff
 
@@ -26,6 +35,9 @@ from ..compat import const, ticks_diff
 # RAM (imported, each took a slot in this module's dict)
 _AVAILABLE = const(1)
 _UNAVAILABLE = const(2)
+_DIRECT = const(0)  # every allowed link, the destination as the hop
+_LEARNED = const(1)  # routing links only, by their learned or heard hop
+_UNROUTED = const(2)  # links that do not route only
 
 MEDIUM_ANY = "any"
 MEDIUM_ALL = "all"
@@ -38,6 +50,7 @@ class Router:
         self.routes = dict(routes or {})  # final destination name -> next hop name
         self.urgent = urgent
         self._stalled = {}  # (link name, hop id) -> ticks when the transport gave up there
+        self.routing = None  # acomm.transport.routing.Routing, when routes are learned
 
     def next_hop(self, final):
         names = self.names
@@ -71,13 +84,35 @@ class Router:
             del self._stalled[(link.name, hop)]
         return 0, 0 if st == _AVAILABLE else 1
 
-    def choose(self, final, size, priority, medium):
+    def choose(self, final, size, priority, medium, now=0):
         # -> (link, next hop id), or None while no allowed link can reach it
         hop = self.next_hop(final)
         if hop is None:
             return None
+        rt = self.routing
+        if rt is None or hop != final:
+            return self._best(hop, size, priority, medium, now, _DIRECT)
+        # learned routes first, then the links that do not route (satellite),
+        # then, once a search has given up, a direct try everywhere
+        r = self._best(final, size, priority, medium, now, _LEARNED)
+        if r is None:
+            r = self._best(final, size, priority, medium, now, _UNROUTED)
+            if r is None and not rt.search(now, final):
+                r = self._best(final, size, priority, medium, now, _DIRECT)
+        return r
+
+    def _best(self, final, size, priority, medium, now, mode):
+        rt = self.routing
         best = None
         for link in self.links(medium):
+            hop = final
+            if mode != _DIRECT:
+                if rt.routes_on(link) != (mode == _LEARNED):
+                    continue
+                if mode == _LEARNED:
+                    hop = rt.hop_on(now, link, final)
+                    if hop is None:
+                        continue
             if not link.addressable(hop):
                 continue
             reach = self._reach(link, hop)
@@ -91,5 +126,5 @@ class Router:
             else:
                 score = (reach[0], money, ms, reach[1])
             if best is None or score < best[0]:
-                best = (score, link)
-        return None if best is None else (best[1], hop)
+                best = (score, link, hop)
+        return None if best is None else (best[1], best[2])

@@ -16,6 +16,11 @@
 #                          0..jitter_ms, so neighbours that heard the same
 #                          request do not answer into each other
 #   events: ("found", dest, cost) and ("unreachable", dest) in take_events()
+#   searching(dest)        whether a search for dest runs (not after it gave up)
+#
+# A search given up is held off for hold_ms: find() does nothing for that
+# destination until then, so a node that keeps asking for an unreachable
+# one floods a request per hold_ms, not one per call.
 #
 # Requests: each node rebroadcasts an (origin, id) at most once (a bounded
 # cache of the last `seen_cap`), adds the cost of the hop it came over, and
@@ -43,7 +48,7 @@ BROADCAST = const(255)
 
 class RouteFinder:
     def __init__(self, node_id, table, hop_cost, links=("acoustic",), tries=3, search_ms=60000,
-                 lifetime_ms=600000, jitter_ms=2000, unknown_cost=32, seen_cap=32, seed=1):
+                 lifetime_ms=600000, jitter_ms=2000, unknown_cost=32, seen_cap=32, seed=1, hold_ms=0):
         self.node_id = node_id
         self.table = table
         self.hop_cost = hop_cost
@@ -54,11 +59,12 @@ class RouteFinder:
         self.jitter_ms = jitter_ms
         self.unknown_cost = unknown_cost
         self.seen_cap = seen_cap
+        self.hold_ms = hold_ms
         self.seq = 0  # this node's own destination sequence number
         self._rid = 0
         self._rng = Prng(seed)
         self._seen = []  # (origin, request id), oldest first
-        self._searches = {}  # dest -> [tries left, next try at]
+        self._searches = {}  # dest -> [tries left (-1: given up, held off), next try at]
         self._out = []
         self._events = []
         self.stats = {"requests": 0, "rebroadcasts": 0, "replies": 0, "errors": 0, "bad": 0, "duplicates": 0}
@@ -73,6 +79,11 @@ class RouteFinder:
         if dest not in self._searches:
             self._searches[dest] = [self.tries, now]
             self.poll(now)
+
+    def searching(self, dest):
+        """Whether a search for dest is running (False when none was asked, or it gave up)."""
+        s = self._searches.get(dest)
+        return s is not None and s[0] >= 0
 
     def _request(self, now, dest):
         self._rid = (self._rid + 1) % 256
@@ -90,9 +101,16 @@ class RouteFinder:
             s = self._searches[dest]
             if ticks_diff(now, s[1]) < 0:
                 continue
-            if s[0] <= 0:
-                del self._searches[dest]
+            if s[0] < 0:
+                del self._searches[dest]  # held off long enough: the next find() asks again
+                continue
+            if s[0] == 0:
                 self._events.append(("unreachable", dest))
+                if self.hold_ms > 0:
+                    s[0] = -1
+                    s[1] = ticks_add(now, self.hold_ms)
+                else:
+                    del self._searches[dest]
                 continue
             s[0] -= 1
             s[1] = ticks_add(now, self.search_ms)
@@ -154,7 +172,7 @@ class RouteFinder:
         self.table.offer(now, dest, hop, link, cost, dseq, lifetime)
         if origin == self.node_id:
             if dest in self._searches:
-                del self._searches[dest]
+                del self._searches[dest]  # found (even after a give-up: a late reply is news)
             r = self.table.lookup(now, dest)
             if r is not None:
                 self._events.append(("found", dest, r[2]))

@@ -1,0 +1,186 @@
+# Learned routes on a running node (issue 36): joins the route table and the
+# route finder to the transport's links. Imported only when the transport is
+# made with routing=..., so a board that does not route pays nothing.
+#
+# Which links route: those whose medium is in `media` (acoustic by default):
+# they carry adverts, so a neighbour is known, and a route there is found
+# by a flooded request. Other links (satellite, a cable) keep the static
+# rule: the destination is the hop.
+#
+# The metric of a hop is its ETX x 16 (acomm.link.neighbours, one table per
+# routing link, fed by the link's adverts and heard frames and by the
+# transport's polls, answered or not) times the link's airtime factor: the
+# seconds a 64-byte frame takes there, latency included, at least 1. A
+# neighbour without a figure yet counts as ETX 2.
+#
+# A packet for a destination no route names waits while its search runs;
+# the finder gives up after its tries and then holds off (hold_ms) before
+# searching again, so an unreachable node costs a request per hold_ms, not
+# a flood per poll. Route control frames go out as the link's CONTROL
+# frames, sealed like every frame when the node has a key; their statuses
+# are the transport's, not the application's.
+
+from ..compat import const, ticks_diff
+from .routefinder import BROADCAST, RouteFinder
+from .routetable import RouteTable
+
+_CONTROL = const(4)  # acomm.frame.CONTROL
+_AVAILABLE = const(1)
+_UNKNOWN_ETX16 = const(32)
+_CONTROL_PRIORITY = const(3)
+_CONTROL_LIFESPAN_S = const(30)
+_MAX_HELD = const(16)  # rebroadcasts waiting for their jitter; more are dropped (a flood has other copies)
+
+
+class Routing:
+    def __init__(self, node_id, names, links, next_id, media=("acoustic",), capacity=32, tries=3,
+                 search_ms=60000, hold_ms=300000, lifetime_ms=600000, jitter_ms=None, seed=None):
+        """links: name -> Link (the node's, read live); next_id(): a fresh link request id."""
+        self.names = names
+        self.node_links = links
+        self._next_id = next_id
+        self.media = tuple(media)
+        self.table = RouteTable(capacity)
+        self.finder = RouteFinder(node_id, self.table, self.hop_cost, links=(), tries=tries, search_ms=search_ms,
+                                  lifetime_ms=lifetime_ms, jitter_ms=jitter_ms or 0, hold_ms=hold_ms,
+                                  seed=node_id + 1 if seed is None else seed)
+        self._nlinks = -1
+        self._auto_jitter = jitter_ms is None
+        self._held = []  # (not before, link name, to, payload)
+        self._rids = {}  # link request id -> (link name, hop id or None): the control frames' statuses
+        self.stats = {"control_sent": 0, "control_bytes": 0, "control_dropped": 0}
+
+    # -- links and costs ------------------------------------------------------------------
+    def routes_on(self, link):
+        """Whether this link's packets follow learned routes."""
+        return link.medium in self.media or link.name in self.media
+
+    def neighbours(self, link):
+        """The link's neighbour table (acomm.link.neighbours.Neighbours), made on first use."""
+        nb = link.neighbours
+        if nb is None:
+            from ..link.neighbours import Neighbours
+
+            nb = link.neighbours = Neighbours()
+        return nb
+
+    def hop_cost(self, now, link_name, hop):
+        """ETX x 16 of the hop times its airtime factor (an int >= 16)."""
+        link = self.node_links.get(link_name)
+        if link is None:
+            return None
+        e = self.neighbours(link).etx16(now, hop)
+        c = link.caps
+        ms = c.latency_ms + (512000 // c.bitrate if c.bitrate else 60000)  # 64 bytes
+        return (_UNKNOWN_ETX16 if e is None else e) * (1 + ms // 1000)
+
+    # -- the next hop ------------------------------------------------------------------------
+    def hop_on(self, now, link, final):
+        """The next hop towards final on a routing link: final itself when heard there (unless a
+        learned route by this link is cheaper), else that route's hop, else None."""
+        r = self.table.lookup(now, final)
+        if r is not None and r[1] != link.name:
+            r = None
+        if link.discovery.state(final) == _AVAILABLE:
+            # heard directly; a poor direct link loses to a cheaper learned route
+            if r is None or r[0] == final or self.hop_cost(now, link.name, final) <= r[2]:
+                return final
+        return None if r is None else r[0]
+
+    def search(self, now, final):
+        """No routing link has a way to final: start (or keep) its search. -> True while one runs
+        (the packet should wait for it), False when the last one gave up (other links may try)."""
+        f = self.finder
+        self._sync_links()
+        if not f.links:
+            return False
+        f.find(now, final)
+        return f.searching(final)
+
+    def learn(self, now, link, origin, hop):
+        """Traffic from origin came in by hop on link: a route back to origin, for free."""
+        if origin != hop and self.routes_on(link) and self.table.lookup(now, origin) is None:
+            self.table.offer(now, origin, hop, link.name, self.hop_cost(now, link.name, hop) * 2, -1,
+                             self.finder.lifetime_ms)
+
+    def attempt(self, now, link, hop, answered):
+        """A poll to hop on link was answered, or not (ETX's evidence); three unanswered in a row
+        (the transport's stall) also call hop_failed."""
+        if self.routes_on(link):
+            self.neighbours(link).attempt(now, hop, answered)
+
+    def hop_failed(self, now, link, hop):
+        """hop stopped answering on link: routes through it turn invalid and an error goes out."""
+        if self.routes_on(link):
+            self.finder.hop_failed(now, hop, link.name)
+
+    # -- control frames ----------------------------------------------------------------------
+    def heard(self, now, link, src, payload):
+        """A CONTROL frame's payload from neighbour src on link."""
+        if self.routes_on(link):
+            self.finder.heard(now, link.name, src, payload)
+
+    def _sync_links(self):
+        # the routing links' names, for the finder's floods (links can be added after the transport)
+        links = self.node_links
+        if len(links) != self._nlinks:
+            self._nlinks = len(links)
+            self.finder.links = tuple(n for n in links if self.routes_on(links[n]))
+        if self._auto_jitter:
+            # a rebroadcast waits 0..jitter: wide enough that the neighbours that heard one request
+            # seldom start within one short frame of each other (they would collide at the next
+            # hop: acoustic modems rarely sense the carrier), 2 x (neighbours + 1) short frames
+            j = 0
+            for n in self.finder.links:
+                link = links[n]
+                bps = link.caps.bitrate or 100
+                nb = link.neighbours
+                k = 2 * (2 + (0 if nb is None else len(nb.table))) * (128000 // bps + 200)
+                if k > j:
+                    j = k
+            self.finder.jitter_ms = j
+
+    def poll(self, now):
+        """The finder's retries, and the control frames that are due, onto their links."""
+        f = self.finder
+        self._sync_links()
+        f.poll(now)
+        f.take_events()  # the waiting packets ask again at the transport's next poll
+        held = self._held
+        for item in f.take():
+            if len(held) < _MAX_HELD:
+                held.append(item)
+            else:
+                self.stats["control_dropped"] += 1
+        if not held:
+            return
+        keep = []
+        for item in held:
+            if ticks_diff(now, item[0]) < 0:
+                keep.append(item)
+            else:
+                self._send(now, item[1], item[2], item[3])
+        self._held = keep
+
+    def _send(self, now, link_name, to, payload):
+        link = self.node_links.get(link_name)
+        if link is None:
+            return
+        rid = self._next_id()
+        dst = "*" if to == BROADCAST else self.names.name_of(to)  # acomm.link.BROADCAST
+        # known before the request: its first status comes from inside request()
+        self._rids[rid] = (link_name, None if to == BROADCAST else to)
+        if link.request(now, rid, dst, payload, _CONTROL_LIFESPAN_S, _CONTROL_PRIORITY, ftype=_CONTROL):
+            self.stats["control_sent"] += 1
+            self.stats["control_bytes"] += len(payload)
+        else:
+            self._rids.pop(rid, None)
+            self.stats["control_dropped"] += 1
+
+    def on_link_status(self, rid, final):
+        """-> True when rid was a control frame's request (its statuses stop here)."""
+        if rid not in self._rids:
+            return False
+        if final:
+            del self._rids[rid]
+        return True

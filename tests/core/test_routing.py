@@ -1,0 +1,125 @@
+# Learned routes on the running stack (acomm.transport.routing): SeaTrac
+# nodes in the simulated ocean, each reaching only the nodes within 200 m,
+# with transports made with routing on. A packet finds its way down a
+# chain, around a relay that died, and never over a link that does not
+# route when that link can carry it; in strict mode a forged route reply
+# is refused; a node that does not route drops route control.
+from acomm.events import EV_PACKET, EV_PACKET_STATUS
+from acomm.transport import Transport
+from acomm.transport import routewire as W
+from acomm_sim.channel import Channel
+from acomm_sim.world import World
+
+from transportnet import add_satellite, wall_of
+
+RANGE = ((0.0, 0.0), (200.0, 0.0), (201.0, 1.0))  # heard within 200 m, never beyond
+LINK = {"advert_period_ms": 30000}
+FAST = {"search_ms": 30000}
+
+
+def _net(positions, seed=1, routing=FAST, names=None):
+    w = World(seed=seed, channel=Channel(seed=seed, loss_curve=RANGE))
+    nodes = []
+    for i, pos in enumerate(positions):
+        name = names[i] if names else "n%d" % (i + 1)
+        sn = w.add(name, i + 1, "seatrac", position=pos, link_opts=LINK)
+        sn.t = Transport.of(sn.node, wall=wall_of(w), routing=routing)
+        nodes.append(sn)
+    w.run(65000)  # two advert rounds: every node knows its neighbours
+    return w, nodes
+
+
+def _final(sn, pid):
+    done = [e[2] for e in sn.events if e[0] == EV_PACKET_STATUS and e[1] == pid and e[2] >= 4]
+    return done[-1] if done else None
+
+
+def _got(sn):
+    return [e[3] for e in sn.events if e[0] == EV_PACKET]
+
+
+def _wait(w, cond, ms, step=1000):
+    t = 0
+    while t < ms and not cond():
+        w.run(step)
+        t += step
+    return cond()
+
+
+def test_a_packet_finds_its_way_down_a_four_hop_chain():
+    w, ns = _net([(0, 0, 10), (150, 0, 10), (300, 0, 10), (450, 0, 10), (600, 0, 10)])
+    a, e = ns[0], ns[4]
+    pid = a.t.send(w.now(), "n5", b"down the chain " * 4, 3600)
+    assert _wait(w, lambda: _got(e), 400000), (a.t.router.routing.finder.stats, a.t.stats)
+    assert _got(e) == [b"down the chain " * 4]
+    assert _final(a, pid) == 4  # transmitted: the first relay took custody
+    rt = a.t.router.routing
+    hop, link, cost = rt.table.lookup(w.now(), 5)
+    assert hop == 2 and link == "acoustic" and cost > 0
+    assert rt.finder.stats["requests"] >= 1
+    # the relays learned the way back from the packet that went through
+    assert ns[2].t.router.routing.table.lookup(w.now(), 1)[0] == 2
+    # a second packet needs no search
+    before = rt.finder.stats["requests"]
+    a.t.send(w.now(), "n5", b"again", 3600)
+    assert _wait(w, lambda: len(_got(e)) == 2, 300000)
+    assert rt.finder.stats["requests"] == before
+    for sn in ns:
+        assert sn.t.router.routing.stats["control_dropped"] == 0
+
+
+def test_a_dead_relay_is_routed_around():
+    # n1 reaches n4 through n2 (cheaper: found first) or n3; n2 dies after the first packet
+    w, ns = _net([(0, 0, 10), (140, 40, 10), (140, -40, 10), (280, 0, 10)])
+    a, d = ns[0], ns[3]
+    a.t.send(w.now(), "n4", b"first", 3600)
+    assert _wait(w, lambda: _got(d), 300000)
+    first_hop = a.t.router.routing.table.lookup(w.now(), 4)[0]
+    assert first_hop in (2, 3)
+    dead = ns[first_hop - 1]
+    w.channel.set_position(dead.address, 5000, 5000, 10)  # out of everyone's range
+    pid = a.t.send(w.now(), "n4", b"second" * 10, 3600)
+    assert _wait(w, lambda: len(_got(d)) == 2, 900000), (a.t.router.routing.finder.stats, a.t.stats)
+    assert _got(d)[1] == b"second" * 10
+    assert _final(a, pid) in (4, 5)
+    assert a.t.router.routing.table.lookup(w.now(), 4)[0] == 5 - first_hop  # the other one
+
+
+def test_an_unreachable_node_is_searched_then_held_off():
+    w, ns = _net([(0, 0, 10), (150, 0, 10), (2000, 0, 10)], routing={"search_ms": 10000, "tries": 2,
+                                                                     "hold_ms": 120000, "jitter_ms": 500})
+    a = ns[0]
+    a.t.send(w.now(), "n3", b"nobody hears", 600)
+    w.run(60000)
+    f = a.t.router.routing.finder
+    assert f.stats["requests"] == 2 and not f.searching(3)
+    w.run(50000)
+    assert f.stats["requests"] == 2  # held off: no flood per poll
+    # meanwhile the packet tries the destination directly (the fallback); once that stalls and
+    # hold_ms is over, a new search
+    assert _wait(w, lambda: f.stats["requests"] >= 3, 240000)
+
+
+def test_a_link_that_does_not_route_carries_without_a_search():
+    w, ns = _net([(0, 0, 10), (3000, 0, 10)])
+    a, b = ns
+    add_satellite(w, a, b)
+    w.run(30000)
+    a.t.send(w.now(), "n2", b"over the satellite", 3600)
+    assert _wait(w, lambda: _got(b), 300000)
+    assert a.t.router.routing.finder.stats["requests"] == 0
+
+
+def test_a_node_without_routing_ignores_route_control():
+    w = World(seed=3, channel=Channel(seed=3, loss_curve=RANGE))
+    a = w.add("a", 1, "seatrac", position=(0, 0, 10), link_opts=LINK)
+    b = w.add("b", 2, "seatrac", position=(100, 0, 10), link_opts=LINK)
+    tb = Transport.of(b.node, wall=wall_of(w))
+    Transport.of(a.node, wall=wall_of(w), routing=FAST)
+    w.run(40000)
+    rid = a.node.next_req_id()
+    req = W.encode_request(1, 1, 1, 9, W.UNKNOWN_SEQ, 0, 0)
+    assert a.node.link("acoustic").request(w.now(), rid, "*", req, 30, ftype=4)
+    w.run(20000)
+    assert tb.router.routing is None and tb.stats["rx_bad"] == 0
+    assert not [e for e in b.events if e[0] == 29]  # nothing reaches the application either
