@@ -1,11 +1,12 @@
-# Route discovery's three control messages on the water (issue 36): the
+# Route discovery's three control messages, and flooding's one, on the water (issue 36): the
 # payload of a CONTROL frame (acomm.frame.CONTROL, a type nothing else uses),
 # whose header already names the hop that sent it. Decoders raise only
 # DecodeError; encoders check every range themselves (struct does not on
 # MicroPython). docs/wire-format.md, "Route control", has the layout.
 #
-#   byte 0: kind (top 2 bits: 1 request, 2 reply, 3 error) and a 6-bit count:
-#           the hops so far for a request or a reply, the destinations for an error
+#   byte 0: kind (top 2 bits: 0 flood, 1 request, 2 reply, 3 error) and a 6-bit
+#           count: the hops so far for a flood, a request or a reply, the
+#           destinations for an error
 #
 #   request (flooded), 10 bytes:
 #     kind|hops  id  origin  origin_seq(2)  dest  dest_seq(2)  cost(2)
@@ -15,6 +16,9 @@
 #     kind|hops  dest  dest_seq(2)  origin  cost(2)  lifetime (4 s units, 1..255)
 #   error (to the sources that used the hop), 1 + 3 per destination (1..16):
 #     kind|n  (dest  dest_seq(2)) x n
+#   flood (acomm.transport.flood, rebroadcast by every node), 3 + 1..MAX_FLOOD_DATA bytes:
+#     kind|hops  origin  id  data
+#     id: the origin's flood counter mod 256; data is the application's
 #
 # Sequence numbers and costs are big-endian 16-bit. A request for a
 # destination whose sequence number the origin does not know carries
@@ -25,6 +29,7 @@
 from ..compat import const
 from ..errors import DecodeError, EncodeError
 
+FLOOD = const(0)
 REQUEST = const(1)
 REPLY = const(2)
 ERROR = const(3)
@@ -35,6 +40,10 @@ MAX_ERRORS = const(16)
 LIFETIME_UNIT_MS = const(4000)
 _REQ_LEN = const(10)
 _REP_LEN = const(8)
+# A flood's data fits a sealed elided frame on a 30-byte SeaTrac packet, the
+# smallest acoustic MTU acomm drives: 30 - 2 (link byte, flags byte) - 7
+# (counter and 4-byte tag) - 3 (this header) = 18 bytes.
+MAX_FLOOD_DATA = const(18)
 
 
 def _id(v, what):
@@ -87,10 +96,20 @@ def encode_error(lost):
     return bytes(out)
 
 
+def encode_flood(origin, mid, hops, data):
+    """A flood: origin, its id 0..255, hops 0..63, then 1..MAX_FLOOD_DATA bytes of data."""
+    if not isinstance(mid, int) or not 0 <= mid <= 255:
+        raise EncodeError("flood id %r outside 0..255" % (mid,))
+    if not isinstance(data, (bytes, bytearray, memoryview)) or not 1 <= len(data) <= MAX_FLOOD_DATA:
+        raise EncodeError("flood data must be 1..%d bytes" % MAX_FLOOD_DATA)
+    return _head(FLOOD, hops) + bytes((_id(origin, "origin"), mid)) + bytes(data)
+
+
 def decode(data):
     """-> ("request", rid, origin, origin_seq, dest, dest_seq, hops, cost)
        | ("reply", dest, dest_seq, origin, hops, cost, lifetime_ms)
-       | ("error", [(dest, seq), ...]); DecodeError for anything else."""
+       | ("error", [(dest, seq), ...]) | ("flood", origin, id, hops, data);
+       DecodeError for anything else."""
     if not data:
         raise DecodeError("empty route control")
     kind = data[0] >> 6
@@ -123,4 +142,7 @@ def decode(data):
                 raise DecodeError("route error with a reserved id or sequence number")
             lost.append((data[i], s))
         return ("error", lost)
-    raise DecodeError("route control of kind 0")
+    # kind 0, a flood: data of 1..MAX_FLOOD_DATA bytes, never from the broadcast id
+    if not 4 <= len(data) <= 3 + MAX_FLOOD_DATA or data[1] > 254:
+        raise DecodeError("flood of %d bytes or from a reserved id" % len(data))
+    return ("flood", data[1], data[2], n, bytes(data[3:]))

@@ -1,4 +1,4 @@
-# Route control on the water (acomm.transport.routewire): the three
+# Route control on the water (acomm.transport.routewire): the four
 # messages round-trip at their sizes, encoders refuse what does not fit,
 # and the decoder takes only what an encoder could have written, raising
 # DecodeError for everything else (random bytes included).
@@ -45,7 +45,7 @@ def test_encoders_refuse_what_does_not_fit():
 
 
 def test_decoder_rejects_bad_input_only_with_decode_error():
-    bad = [b"", b"\x00", bytes(10), W.encode_request(1, 2, 3, 4, 5, 6, 7)[:-1],
+    bad = [b"", b"\x00", bytes(3), W.encode_request(1, 2, 3, 4, 5, 6, 7)[:-1],
            W.encode_reply(1, 2, 3, 4, 5, 6) + b"\x00", b"\xc0", b"\xc1\x01\x00", b"\xc2\x01\x00\x01",
            b"\xc1\xff\x00\x01", b"\x82\x01\xff\xff\x02\x00\x00\x01", b"\x82\x01\x00\x01\x02\x00\x00\x00",
            b"\x40\x01\xff\x00\x01\x02\x00\x00\x00\x00", b"\x40\x01\x02\xff\xff\x02\x00\x00\x00\x00", bytes.fromhex("4a24e19bf6331501ffff")]
@@ -65,6 +65,35 @@ def test_decoder_rejects_bad_input_only_with_decode_error():
             again = W.encode_request(*got[1:])
         elif kind == "reply":
             again = W.encode_reply(got[1], got[2], got[3], got[4], got[5], got[6])
+        elif kind == "flood":
+            again = W.encode_flood(got[1], got[2], got[3], got[4])
         else:
             again = W.encode_error(got[1])
         assert again == b, (b, got)
+
+
+def test_flood_round_trip_and_size():
+    b = W.encode_flood(3, 200, 5, b"all up")
+    assert b == bytes((0x05, 3, 200)) + b"all up"
+    assert W.decode(b) == ("flood", 3, 200, 5, b"all up")
+    full = W.encode_flood(254, 255, 63, bytearray(range(W.MAX_FLOOD_DATA)))
+    assert len(full) == 3 + W.MAX_FLOOD_DATA == 21  # a sealed elided frame of 30 bytes
+    assert W.decode(full) == ("flood", 254, 255, 63, bytes(range(W.MAX_FLOOD_DATA)))
+    assert W.decode(W.encode_flood(0, 0, 0, memoryview(b"x"))) == ("flood", 0, 0, 0, b"x")
+    # the other kinds decode as before
+    assert W.decode(W.encode_error([(1, 2)]))[0] == "error"
+
+
+def test_flood_encoder_and_decoder_refuse_what_does_not_fit():
+    assert raises(EncodeError, W.encode_flood, 255, 1, 0, b"x")  # the broadcast id
+    assert raises(EncodeError, W.encode_flood, 3, 256, 0, b"x")
+    assert raises(EncodeError, W.encode_flood, 3, -1, 0, b"x")
+    assert raises(EncodeError, W.encode_flood, 3, 1, 64, b"x")
+    assert raises(EncodeError, W.encode_flood, 3, 1, -1, b"x")
+    assert raises(EncodeError, W.encode_flood, 3, 1, 0, b"")
+    assert raises(EncodeError, W.encode_flood, 3, 1, 0, bytes(W.MAX_FLOOD_DATA + 1))
+    assert raises(EncodeError, W.encode_flood, 3, 1, 0, "text")
+    assert raises(EncodeError, W.encode_flood, 3.0, 1, 0, b"x")
+    for b in (b"\x00", b"\x00\x03", b"\x05\x03\x01", b"\x00\xff\x01x",
+              b"\x00\x03\x01" + bytes(W.MAX_FLOOD_DATA + 1)):
+        assert raises(DecodeError, W.decode, b), b

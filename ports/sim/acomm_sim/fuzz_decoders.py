@@ -295,7 +295,7 @@ def _auth_target():
 
 
 def _route_target():
-    # route control (acomm.transport.routewire): what decodes encodes back to the same bytes
+    # route control and floods (acomm.transport.routewire): what decodes encodes back to the same bytes
     from acomm.transport import routewire as W
 
     rng = Prng(136)
@@ -306,6 +306,9 @@ def _route_target():
         corpus.append(W.encode_reply(rng.below(255), rng.below(65535), rng.below(255), rng.below(64),
                                      rng.below(70000), rng.below(1100000)))
         corpus.append(W.encode_error([(rng.below(255), rng.below(65535)) for _ in range(rng.range(1, 17))]))
+    for _ in range(8):
+        corpus.append(W.encode_flood(rng.below(255), rng.below(256), rng.below(64),
+                                     rng.bytes(rng.range(1, W.MAX_FLOOD_DATA))))
 
     def run(data, rng):
         got = W.decode(data)
@@ -313,6 +316,8 @@ def _route_target():
             again = W.encode_request(*got[1:])
         elif got[0] == "reply":
             again = W.encode_reply(*got[1:])
+        elif got[0] == "flood":
+            again = W.encode_flood(*got[1:])
         else:
             again = W.encode_error(got[1])
         if again != bytes(data):
