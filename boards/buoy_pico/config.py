@@ -14,6 +14,11 @@ CONFIG = {
     "mpy_lines": False,
     "peers": {"diver": 2, "shore": 3, "auv": 4},
     "routes": {},
+    # learned routes (multi-hop over the acoustic links: route requests,
+    # replies and errors): False, True, or a dict of
+    # acomm.transport.routing.Routing's options, e.g. {"search_ms": 30000}.
+    # About 2 KB more heap with it on; False loads none of it
+    "routing": False,
     # 64 KiB of the Pico's flash filesystem for packets waiting to be sent
     "storage": {"path": "/data/acomm.store", "capacity": 65536, "max_record": 256},
     "max_packet": 4096,

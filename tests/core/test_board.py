@@ -108,6 +108,26 @@ def test_a_wrong_field_is_named():
     assert "links[1].options" in str(e)
 
 
+def test_routing_is_a_board_option_off_by_default():
+    base = _config("buoy_pico")
+    c = check(base)
+    assert "routing" not in c  # off: the checked config is as it was
+    t = build(c, lambda lk: FakeUART()).transport
+    assert t.router.routing is None
+    c = _copy(base)
+    c["routing"] = True
+    assert check(c)["routing"] is True
+    rt = build(check(c), lambda lk: FakeUART()).transport.router.routing
+    assert rt is not None and rt.finder.search_ms == 60000
+    c["routing"] = {"search_ms": 30000, "media": ["acoustic"], "capacity": 8}
+    rt = build(check(c), lambda lk: FakeUART()).transport.router.routing
+    assert rt.finder.search_ms == 30000 and rt.table.capacity == 8 and rt.media == ("acoustic",)
+    for bad, field in (("yes", "routing"), ({"search": 1}, "routing"), ({"search_ms": 5}, "routing.search_ms"),
+                       ({"media": []}, "routing.media")):
+        c["routing"] = bad
+        assert field in _error(c), bad
+
+
 def test_the_buoy_relays_for_a_simulated_minute():
     r = run_board(_config("buoy_pico"), {"diver": "seatrac", "shore": "iridium"}, via={"diver": "shore"})
     assert r["sim_ms"] >= 60000

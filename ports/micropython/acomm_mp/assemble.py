@@ -45,7 +45,9 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
     st = cfg["storage"]
     # no store: the transport keeps its packets in RAM (a MemoryStore)
     store = open_store(st) if st is not None and open_store is not None else None
-    transport = Transport.of(node, store=store, routes=cfg["routes"], wall=wall, max_packet=cfg["max_packet"])
+    # routing: None (absent) loads nothing of the route finder; True or a dict: learned routes
+    transport = Transport.of(node, store=store, routes=cfg["routes"], wall=wall, max_packet=cfg["max_packet"],
+                             routing=cfg.get("routing"))
     station = None
     sc = cfg["station"]
     if sc is not None:

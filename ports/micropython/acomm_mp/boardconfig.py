@@ -16,6 +16,13 @@
 #                 buoy's modules loaded from flash (no effect when frozen)
 #   peers         {name: node id} of the other nodes it talks to
 #   routes        {final destination: next hop}, both known names
+#   routing       absent or False: static routes only, and the routing
+#                 modules are never loaded; True, or a dict of
+#                 acomm.transport.routing.Routing's options (media, capacity,
+#                 tries, search_ms, hold_ms, lifetime_ms, jitter_ms, seed):
+#                 routes are learned on the acoustic links (route requests,
+#                 replies, errors; static routes still win), for about
+#                 2 KB more heap on the buoy (BENCHMARKS.md, routing figures)
 #   storage       {"path", "capacity", "max_record"} of the packet store on
 #                 flash, or None to keep packets in RAM only
 #   max_packet    the transport's largest packet, bytes
@@ -144,6 +151,34 @@ def _auth(a):
     return out
 
 
+# acomm.transport.routing.Routing's options a board config may set (ints, but media)
+_ROUTING = {"capacity": (1, 254), "tries": (1, 10), "search_ms": (1000, 3600000), "hold_ms": (0, 86400000),
+            "lifetime_ms": (1000, 86400000), "jitter_ms": (0, 600000), "seed": (0, 0x7FFFFFFF)}
+
+
+def _routing(r):
+    # learned routes (acomm.transport.routing): False/None (absent), True or a dict of options
+    if r is None or r is False:
+        return None
+    if r is True:
+        return True
+    if not isinstance(r, dict):
+        _fail("routing", "True, False or a dict of Routing options", r)
+    out = {}
+    for k in r:
+        if k == "media":
+            m = r[k]
+            if not isinstance(m, (list, tuple)) or not m or not all(isinstance(x, str) and x for x in m):
+                _fail("routing.media", "a non-empty list of link media or names", m)
+            out[k] = tuple(m)
+        elif k in _ROUTING:
+            lo, hi = _ROUTING[k]
+            out[k] = _int(r, k, lo, hi, "routing." + k)
+        else:
+            _fail("routing", "Routing options among media, " + ", ".join(sorted(_ROUTING)), k)
+    return out
+
+
 def _web(w):
     # the operator console (acomm_web.board; never loaded without this)
     if w is None:
@@ -191,6 +226,9 @@ def check(cfg):
         if routes[k] not in peers:
             _fail("routes." + k, "a next hop among the peers", routes[k])
     out["routes"] = dict(routes)
+    rt = _routing(cfg.get("routing"))
+    if rt is not None:  # absent otherwise: a board that does not route keeps the checked config it had
+        out["routing"] = rt
     st = cfg.get("storage")
     if st is not None:
         if not isinstance(st, dict):
@@ -231,6 +269,6 @@ def check(cfg):
     if w is not None:  # absent otherwise: the buoy's checked config stays as it was
         out["web"] = w
     for k in cfg:
-        if k not in out and k not in ("web", "mpy_lines"):
+        if k not in out and k not in ("web", "mpy_lines", "routing"):
             _fail("CONFIG", "known fields only", k)
     return out
