@@ -133,7 +133,7 @@ class Node:
                 t.on_segment(self._now, ev[_LINK], ev[_SEG_SRC], ev[_SEG_DST], ev[_SEG_HEAD], ev[_SEG_PAYLOAD], ev[_SEG_AUTHED])
                 return
             if code == _EV_CONTROL:
-                t.on_control(self._now, ev[_LINK], ev[2], ev[3])
+                t.on_control(self._now, ev[_LINK], ev[2], ev[3], ev[4])
                 return
             if code == _EV_STATUS and t.on_link_status(self._now, ev[_REQ_ID], ev[_STATUS], ev[_REASON]):
                 return

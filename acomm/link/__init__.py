@@ -597,7 +597,7 @@ class Link:
         if f.ftype == fr.CONTROL:
             # route control (acomm.transport.routing): the transport's too
             if mine:
-                self._emit((_EV_CONTROL, self, src, f.payload))
+                self._emit((_EV_CONTROL, self, src, f.payload, f.authed))
             return
         data = f.ftype == fr.DATA or f.ftype == fr.REPLY
         if not mine:

@@ -135,7 +135,7 @@ class Transport:
             store = MemoryStore()
         self.packets = PacketStore(store, urgent)
         self.router = Router(names, links, routes, urgent)
-        if routing:
+        if routing is not None and routing is not False:  # True, or a dict of options ({} too)
             # imported here: a board that does not route never loads it
             from .routing import Routing
 
@@ -578,10 +578,29 @@ class Transport:
         for k in [k for k in self._rx if ticks_diff(now, self._rx[k].touched) > _RX_TIMEOUT_MS]:
             del self._rx[k]
 
-    def on_control(self, now, link, src, payload):
-        """A CONTROL frame's payload from neighbour src on link (route control; dropped without routing)."""
-        if self.router.routing is not None:
-            self.router.routing.heard(now, link, src, payload)
+    def on_control(self, now, link, src, payload, authed=False):
+        """A CONTROL frame's payload from neighbour src on link (route control and floods; dropped
+        without routing). A flood new here goes up as (EV_PACKET, origin, "*", data[, authed])."""
+        rt = self.router.routing
+        if rt is None:
+            return
+        for origin, data in rt.heard(now, link, src, payload):
+            g = self.guard
+            if g is not None and not g.admits(data, authed, self.auth):
+                self.stats["refused_unauthed"] += 1
+                self._emit((_EV_REFUSED, link, self.names.name_of(origin), g.REFUSED))
+                continue
+            ev = (_EV_PACKET, self.names.name_of(origin), "*", data)
+            self._emit(ev if g is None else ev + (authed,))
+
+    def flood(self, now, data, hops_limit=None):
+        """Sends data (1..18 bytes, acomm.transport.flood) to every node within hops_limit hops, each
+        taking it once as (EV_PACKET, origin, "*", data). Needs routing on; AcommError otherwise, or
+        for data that does not fit. No status follows: a flood is not acknowledged."""
+        rt = self.router.routing
+        if rt is None:
+            raise AcommError("flooding needs the transport made with routing on")
+        return rt.flood(now, data, hops_limit)
 
     def on_segment(self, now, link, src, dst, head, payload, authed=False):
         try:

@@ -128,8 +128,10 @@ class RouteFinder:
             self._on_request(now, link, hop, m)
         elif m[0] == "reply":
             self._on_reply(now, link, hop, m)
-        else:
+        elif m[0] == "error":
             self._on_error(now, link, hop, m[1])
+        else:
+            self.stats["bad"] += 1  # a flood's, which is acomm.transport.flood's to take
 
     def _cost(self, now, link, hop):
         c = self.hop_cost(now, link, hop)

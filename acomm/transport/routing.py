@@ -19,8 +19,13 @@
 # a flood per poll. Route control frames go out as the link's CONTROL
 # frames, sealed like every frame when the node has a key; their statuses
 # are the transport's, not the application's.
+#
+# Floods (acomm.transport.flood) go out on the same links, as the same
+# CONTROL frames: each node hands a new one up once and passes it on once.
 
 from ..compat import const, ticks_diff
+from ..errors import AcommError
+from .flood import Flooder
 from .routefinder import BROADCAST, RouteFinder
 from .routetable import RouteTable
 
@@ -44,6 +49,7 @@ class Routing:
         self.finder = RouteFinder(node_id, self.table, self.hop_cost, links=(), tries=tries, search_ms=search_ms,
                                   lifetime_ms=lifetime_ms, jitter_ms=jitter_ms or 0, hold_ms=hold_ms,
                                   seed=node_id + 1 if seed is None else seed)
+        self.flooder = Flooder(node_id, links=(), jitter_ms=jitter_ms or 0, seed=node_id + 7 if seed is None else seed + 6)
         self._nlinks = -1
         self._auto_jitter = jitter_ms is None
         self._held = []  # (not before, link name, to, payload)
@@ -116,16 +122,29 @@ class Routing:
 
     # -- control frames ----------------------------------------------------------------------
     def heard(self, now, link, src, payload):
-        """A CONTROL frame's payload from neighbour src on link."""
-        if self.routes_on(link):
-            self.finder.heard(now, link.name, src, payload)
+        """A CONTROL frame's payload from neighbour src on link -> [(origin, data)] of a flood
+        heard for the first time (else [])."""
+        if not self.routes_on(link):
+            return ()
+        fl = self.flooder
+        if fl.heard(now, link.name, src, payload):
+            return [(e[1], e[2]) for e in fl.take_events()]
+        self.finder.heard(now, link.name, src, payload)
+        return ()
+
+    def flood(self, now, data, hops_limit=None):
+        """Floods data to every node (acomm.transport.flood.Flooder.send) -> its id."""
+        self._sync_links()
+        if not self.flooder.links:
+            raise AcommError("no link floods: none is %s" % " or ".join(self.media))
+        return self.flooder.send(now, data, hops_limit)  # EncodeError (an AcommError) for bad data
 
     def _sync_links(self):
         # the routing links' names, for the finder's floods (links can be added after the transport)
         links = self.node_links
         if len(links) != self._nlinks:
             self._nlinks = len(links)
-            self.finder.links = tuple(n for n in links if self.routes_on(links[n]))
+            self.finder.links = self.flooder.links = tuple(n for n in links if self.routes_on(links[n]))
         if self._auto_jitter:
             # a rebroadcast waits 0..jitter: wide enough that the neighbours that heard one request
             # seldom start within one short frame of each other (they would collide at the next
@@ -138,7 +157,7 @@ class Routing:
                 k = 2 * (2 + (0 if nb is None else len(nb.table))) * (128000 // bps + 200)
                 if k > j:
                     j = k
-            self.finder.jitter_ms = j
+            self.finder.jitter_ms = self.flooder.jitter_ms = j
 
     def poll(self, now):
         """The finder's retries, and the control frames that are due, onto their links."""
@@ -146,6 +165,10 @@ class Routing:
         self._sync_links()
         f.poll(now)
         f.take_events()  # the waiting packets ask again at the transport's next poll
+        fl = self.flooder
+        fl.poll(now)
+        for link_name, to, payload in fl.take():
+            self._send(now, link_name, to, payload)
         held = self._held
         for item in f.take():
             if len(held) < _MAX_HELD:

@@ -17,12 +17,12 @@ LINK = {"advert_period_ms": 30000}
 FAST = {"search_ms": 30000}
 
 
-def _net(positions, seed=1, routing=FAST, names=None):
+def _net(positions, seed=1, routing=FAST, names=None, link=LINK):
     w = World(seed=seed, channel=Channel(seed=seed, loss_curve=RANGE))
     nodes = []
     for i, pos in enumerate(positions):
         name = names[i] if names else "n%d" % (i + 1)
-        sn = w.add(name, i + 1, "seatrac", position=pos, link_opts=LINK)
+        sn = w.add(name, i + 1, "seatrac", position=pos, link_opts=link)
         sn.t = Transport.of(sn.node, wall=wall_of(w), routing=routing)
         nodes.append(sn)
     w.run(65000)  # two advert rounds: every node knows its neighbours
@@ -123,3 +123,38 @@ def test_a_node_without_routing_ignores_route_control():
     w.run(20000)
     assert tb.router.routing is None and tb.stats["rx_bad"] == 0
     assert not [e for e in b.events if e[0] == 29]  # nothing reaches the application either
+
+
+def test_a_flood_reaches_every_node_of_a_grid_once():
+    # SeaTrac ids are 1..15; adverts every 2 minutes (at 30 s, 15 beacons of 1.3 s packets collide
+    # often enough that an unlucky relay's only copy is lost: flooding has no repair)
+    w, ns = _net([(150 * (i % 5), 150 * (i // 5), 10) for i in range(15)], routing={}, link={"advert_period_ms": 120000})
+    ns[5].t.flood(w.now(), b"all surface")
+    w.run(120000)
+    for sn in ns:
+        got = [e for e in sn.events if e[0] == EV_PACKET]
+        if sn is ns[5]:
+            assert got == []
+        else:
+            assert [(e[1], e[2], e[3]) for e in got] == [("n6", "*", b"all surface")], sn.node.name
+    assert sum(sn.t.router.routing.flooder.stats["rebroadcasts"] for sn in ns) <= 14
+
+
+def test_flooding_needs_routing_and_short_data():
+    from acomm.errors import AcommError
+
+    w = World(seed=2, channel=Channel(seed=2, loss_curve=RANGE))
+    a = w.add("a", 1, "seatrac", position=(0, 0, 10), link_opts=LINK)
+    t = Transport.of(a.node, wall=wall_of(w))
+    try:
+        t.flood(w.now(), b"x")
+        raise AssertionError("flood without routing")
+    except AcommError:
+        pass
+    t2 = Transport(1, a.node.names, a.node.links, a.node.next_req_id, a.events.append, wall=wall_of(w), routing=True)
+    for bad in (b"", bytes(19)):
+        try:
+            t2.flood(w.now(), bad)
+            raise AssertionError("flood of %d bytes" % len(bad))
+        except AcommError:
+            pass

@@ -65,6 +65,7 @@ package(
         "transport/__init__.py",
         "transport/arq.py",
         "transport/delivery.py",
+        "transport/flood.py",
         "transport/memorystore.py",
         "transport/packetstore.py",
         "transport/route.py",
