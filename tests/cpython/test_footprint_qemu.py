@@ -42,3 +42,36 @@ def test_a_minute_from_a_romfs_image_at_the_boards_partition(tmp_path):
     lfs = fr.run_qemu(harness, 192 * 1024, flash=st.lfs())
     assert lfs["fail"] is None, lfs["text"][-2000:]
     assert rom["code"] + 32 * 1024 < lfs["code"], (rom["code"], lfs["code"])
+
+
+def test_the_routing_minute_exercises_the_buoys_router_and_its_figure_runs():
+    # the buoy's config with routing on: the diver's route requests reach
+    # the buoy's finder, which answers or rebroadcasts them and learns the
+    # route back; the plain minute loads none of it. The routing figure's
+    # code path (bisection and the difference) runs on a narrow bracket
+    r = fr.run_qemu(ELF, 128 * 1024, routing=True)
+    assert r["fail"] is None, r["text"][-2000:]
+    assert r["relayed"] == 1 and r["oom"] == 0
+    assert r["route_requests"] >= 1 and r["routes"] >= 1 and r["control_sent"] >= 1
+    plain = fr.run_qemu(ELF, 128 * 1024)
+    assert plain["routes"] == -1 and plain["route_requests"] == -1
+    assert plain["after_build"] < r["after_build"]
+
+
+def test_the_routing_group_emits_its_figure_and_the_difference(monkeypatch):
+    from acomm_cpython.bench.workloads import footprint_workload as fw
+
+    calls = []
+
+    def fake(elf, heap, routing=False, **kw):
+        # a board whose minute needs 40 KiB, 2 KiB more with routing
+        calls.append(routing)
+        need = 40960 + (2048 if routing else 0)
+        return {"fail": None if heap >= need else "MemoryError", "after_build": 30000, "code": 20000, "peak": 60000}
+
+    monkeypatch.setattr(fw, "run_qemu", fake)
+    got = {}
+    fw._group("routing_cortex_m", lambda n, v, u: got.__setitem__(n, v), {"tmp": None})
+    assert got["heap_min_frozen_cortex_m_routing_bytes"] == 43008
+    assert got["heap_routing_extra_frozen_cortex_m_bytes"] == 2048
+    assert True in calls and False in calls

@@ -254,9 +254,17 @@ def main(path, store_path, rom=None, info=False):
         tx += s.get("tx_frames", 0)
         rx += s.get("rx_frames", 0)
     tr = board.transport
-    print('{"peak": %d, "after_build": %d, "code": %d, "oom": %d, "errors": %d, "tx_frames": %d, "rx_frames": %d, "relayed": %d, "rom": %d, "overruns": %d, "stored": %d}'
+    # a board that routes: route requests its finder heard (rebroadcast,
+    # answered or duplicates), routes in its table, control frames it sent
+    rt = tr.router.routing
+    if rt is None:
+        rq = nr = cs = -1
+    else:
+        fs = rt.finder.stats
+        rq, nr, cs = fs["rebroadcasts"] + fs["replies"] + fs["duplicates"], len(rt.table.routes), rt.stats["control_sent"]
+    print('{"peak": %d, "after_build": %d, "code": %d, "oom": %d, "errors": %d, "tx_frames": %d, "rx_frames": %d, "relayed": %d, "rom": %d, "overruns": %d, "stored": %d, "route_requests": %d, "routes": %d, "control_sent": %d}'
           % (peak, base, code, st["oom"], st["errors"], tx, rx, tr.stats["relayed"], len(_ROM) if _ROM else 0,
-             sum(u.overruns for u in ports), _stored(tr)))
+             sum(u.overruns for u in ports), _stored(tr), rq, nr, cs))
     if info:
         if _OOM:
             # where the heap ran out first (the board counts and carries on)

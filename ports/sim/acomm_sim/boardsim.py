@@ -50,10 +50,10 @@ def board_ends(w, lk, position=None):
     return w.modem_ends(lk["modem"], lk["address"], emu_opts, position)
 
 
-def add_peers(w, cfg, peers, via, wall):
+def add_peers(w, cfg, peers, via, wall, routing=None):
     # the board's peers as simulated nodes with transports: {name: (SimNode,
     # Transport)}; a peer in `via` routes its final destination through the
-    # board
+    # board; routing: the peers' transports learn routes (Transport's option)
     others = {}
     k = 0
     for name in peers:
@@ -74,7 +74,7 @@ def add_peers(w, cfg, peers, via, wall):
         routes = {}
         if via is not None and name in via:
             routes[via[name]] = cfg["name"]
-        others[name] = (p, Transport.of(p.node, routes=routes, wall=wall))
+        others[name] = (p, Transport.of(p.node, routes=routes, wall=wall, routing=routing))
         k += 1
     return others
 

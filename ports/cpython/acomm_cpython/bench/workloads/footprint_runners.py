@@ -18,8 +18,8 @@ import tempfile
 import time
 
 from acomm_cpython.board import boardfiles
-from acomm_cpython.bench.workloads.footprint_minute import (BOARD, LOAD_PACKETS, SIM_MS, ProcPipe, SerialPipe, judge, minute,
-                                                      result)
+from acomm_cpython.bench.workloads.footprint_minute import (BOARD, LOAD_PACKETS, ROUTING_CONFIG, SIM_MS, ProcPipe, SerialPipe,
+                                                      judge, minute, result)
 
 
 def stage_flash(tmp):
@@ -106,18 +106,19 @@ def _run_proc(proc, cfg, seed, tmp, limit_s=None):
 RUN_LIMIT_S = 120  # a run that takes longer is killed: it hung (a qemu minute takes 4-10 s)
 
 
-def _config_text():
+def _config_text(routing=False):
+    # routing: the buoy's config with routing on (footprint_minute.ROUTING_CONFIG)
     with open(os.path.join(boardfiles.board_path(BOARD), "config.py")) as f:
-        return f.read()
+        return f.read() + (ROUTING_CONFIG if routing else "")
 
 
-def put_files(t, store=None):
+def put_files(t, store=None, routing=False):
     # the buoy's config (and store) onto a board at its raw REPL. mpremote's
     # fs_writefile leaves its file object in __main__ as f (and f.write as
     # w): closed, but holding its littlefs cache (1 KiB on a Pico, whose
     # flash is written 256 bytes at a time; 128 bytes on the qemu board)
     # for the whole minute. It is not the buoy's, so it goes
-    t.fs_writefile("/config.py", _config_text().encode())
+    t.fs_writefile("/config.py", _config_text(routing).encode())
     if store is not None:
         t.fs_writefile("/store", store)
     t.exec("del f, w")
@@ -137,7 +138,7 @@ def _read_until(ser, ends, limit_s):
     return buf
 
 
-def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LIMIT_S, store=None):
+def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LIMIT_S, store=None, routing=False):
     """One buoy minute on the qemu Cortex-M3 board with a GC heap of `heap` bytes.
 
     The harness (frozen as acomm_lockstep in elf) is
@@ -145,13 +146,16 @@ def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LI
     UART. rom: a ROMFS image (mounted at /rom); flash: a littlefs image of
     the board's filesystem (the .mpy files under /lib); store: the contents
     of the buoy's store file (seed_store) to start from, with Iridium down
-    for the minute. -> dict: the board's
+    for the minute; routing: the routing minute (the buoy's config with
+    routing on, footprint_minute.ROUTING_CONFIG). -> dict: the board's
     figures, "fail" (None on a pass, else why) and "text" (what the board
     printed besides the protocol: mem_info with info, tracebacks).
     """
     from acomm_cpython.board.qemuboard import QemuBoard
 
     cfg = boardfiles.load_config(boardfiles.board_path(BOARD))
+    if routing:
+        cfg["routing"] = True
     deadline = time.monotonic() + limit_s
     text = b""
     r = None
@@ -160,14 +164,14 @@ def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LI
         t = board.transport()
         t.serial.timeout = 15
         t.enter_raw_repl(soft_reset=False)
-        put_files(t, store)
+        put_files(t, store, routing)
         t.exec_raw_no_follow("import acomm_lockstep\nacomm_lockstep.main('/config.py', '/store', None, %r)" % bool(info))
         pre = _read_until(t.serial, (b"LOCK", b"\x04>"), 60)
         if not pre.endswith(b"LOCK"):
             text = pre
             raise EOFError("the harness did not start")
         text = pre[:-4]
-        minute(SerialPipe(t.serial), cfg, seed, SIM_MS, deadline, iridium_down=store is not None)
+        minute(SerialPipe(t.serial), cfg, seed, SIM_MS, deadline, iridium_down=store is not None, routing=routing)
         t.serial.write(b"Q")
         tail = _read_until(t.serial, (b"\x04>",), 30)
         text += tail
@@ -180,7 +184,7 @@ def run_qemu(elf, heap, rom=None, flash=None, seed=1, info=False, limit_s=RUN_LI
         board.stop()
     out = dict(r or {})
     out["heap"] = heap
-    why = judge(r)
+    why = judge(r, routing)
     if why and b"MemoryError" in text:
         why = "MemoryError (%s)" % why
     if why is None and store is not None and r["stored"] != LOAD_PACKETS + 1:

@@ -18,6 +18,12 @@
 #       the rp2040js emulator; its heap is fixed by the linker, so the GC's
 #       bounds are cut from Python: footprint_pico's header says how, and
 #       how the figure still counts the GC region with its tables).
+#   heap_min_{frozen,romfs}_cortex_m_routing_bytes   the same with the
+#       buoy's config set to route ("routing": True) and a minute whose
+#       diver routes too and floods route requests the buoy hears, answers
+#       and rebroadcasts (footprint_minute.ROUTING_CONFIG);
+#       heap_routing_extra_{frozen,romfs}_cortex_m_bytes: routing's cost,
+#       the routing figure less the plain one of the same run
 #   heap_after_imports_* / heap_after_build_*   gc.mem_alloc() once every
 #       module the buoy runs is imported / once its node is built (roomy heap)
 #   heap_peak_*   gc.mem_alloc() at its highest over the minute, garbage
@@ -128,7 +134,7 @@ def _say(msg):
     print("footprint: " + msg, file=sys.stderr, flush=True)
 
 
-def _heap_min_32(trial, label, emit, name, extra=()):
+def _heap_min_32(trial, label, emit, name, extra=(), figures=None):
     # a roomy run for the figures and an upper bound, then the bisection;
     # bytecode loaded from .mpy files takes the heap too, so those get more
     t0 = time.monotonic()
@@ -138,7 +144,10 @@ def _heap_min_32(trial, label, emit, name, extra=()):
         raise RuntimeError("%s: the buoy's minute failed even at %d bytes: %s\n%s"
                            % (label, big, roomy["fail"], roomy["text"][-1500:]))
     say = (lambda m: _say("%s %s" % (label, m))) if VERBOSE else None
-    emit("heap_min_%s_bytes" % name, bisect(trial, roomy["after_build"], big, say), "bytes")
+    h = bisect(trial, roomy["after_build"], big, say)
+    emit("heap_min_%s_bytes" % name, h, "bytes")
+    if figures is not None:
+        figures[name] = h
     for k in extra:
         emit("heap_%s_%s_bytes" % (k.replace("code", "after_imports"), name), roomy[k], "bytes")
     _say("%s: %.0f s" % (label, time.monotonic() - t0))
@@ -148,15 +157,26 @@ def _heap_min_32(trial, label, emit, name, extra=()):
 VERBOSE = False
 
 # --only NAME: each group of figures and what it needs
-GROUPS = ("frozen_cortex_m", "loaded_cortex_m", "romfs_cortex_m", "mpy_cortex_m", "frozen_i386", "romfs_i386", "mpy_i386",
+GROUPS = ("frozen_cortex_m", "routing_cortex_m", "loaded_cortex_m", "romfs_cortex_m", "romfs_routing_cortex_m", "mpy_cortex_m", "frozen_i386", "romfs_i386", "mpy_i386",
           "flash_text", "boot_rp2040", "frozen_rp2040", "loaded_rp2040", "mpy_rp2040", "unix64")
 
 
 def _group(name, emit, ctx):
     if name == "frozen_cortex_m":
         elf = _fw("cm3-full")
-        r = _heap_min_32(lambda h: run_qemu(elf, h), name, emit, "frozen_cortex_m", ("code", "after_build", "peak"))
+        r = _heap_min_32(lambda h: run_qemu(elf, h), name, emit, "frozen_cortex_m", ("code", "after_build", "peak"),
+                         ctx.setdefault("min", {}))
         ctx["empty"] = r
+    elif name == "routing_cortex_m":
+        # the buoy with routing on; its cost beside the plain figure, run
+        # here when it is not in this run
+        elf = _fw("cm3-full")
+        figs = ctx.setdefault("min", {})
+        _heap_min_32(lambda h: run_qemu(elf, h, routing=True), name, emit, "frozen_cortex_m_routing",
+                     ("code", "after_build", "peak"), figs)
+        if "frozen_cortex_m" not in figs:
+            figs["frozen_cortex_m"] = bisect(lambda h: run_qemu(elf, h), 16384, ROOMY)
+        emit("heap_routing_extra_frozen_cortex_m_bytes", figs["frozen_cortex_m_routing"] - figs["frozen_cortex_m"], "bytes")
     elif name == "loaded_cortex_m":
         # the buoy holding LOAD_PACKETS packets of LOAD_BYTES while it
         # relays the diver's traffic and Iridium is down
@@ -172,14 +192,23 @@ def _group(name, emit, ctx):
         # the body stays in the store until it is sent)
         emit("heap_per_stored_packet_cortex_m_bytes", (r["after_build"] - empty["after_build"]) // LOAD_PACKETS, "bytes")
         emit("store_file_loaded_bytes", len(data), "bytes")
-    elif name in ("romfs_cortex_m", "mpy_cortex_m"):
+    elif name in ("romfs_cortex_m", "mpy_cortex_m", "romfs_routing_cortex_m"):
         elf = _fw("cm3-harness")  # the harness frozen: the figure counts the buoy's files only
         st = ctx.setdefault("armv7m", Staged(ctx["tmp"], "armv7m"))
+        figs = ctx.setdefault("min", {})
+        if name == "romfs_routing_cortex_m":
+            _heap_min_32(lambda h: run_qemu(elf, h, rom=st.rom(), routing=True), name, emit, "romfs_cortex_m_routing",
+                         ("code", "after_build"), figs)
+            if "romfs_cortex_m" not in figs:
+                figs["romfs_cortex_m"] = bisect(lambda h: run_qemu(elf, h, rom=st.rom()), 16384, 2 * ROOMY)
+            emit("heap_routing_extra_romfs_cortex_m_bytes", figs["romfs_cortex_m_routing"] - figs["romfs_cortex_m"],
+                 "bytes")
+            return
         if name == "romfs_cortex_m":
             trial = lambda h: run_qemu(elf, h, rom=st.rom())  # noqa: E731
         else:
             trial = lambda h: run_qemu(elf, h, flash=st.lfs())  # noqa: E731
-        _heap_min_32(trial, name, emit, name, ("code", "after_build"))
+        _heap_min_32(trial, name, emit, name, ("code", "after_build"), figs)
     elif name in ("frozen_i386", "romfs_i386", "mpy_i386"):
         if micropython_i386() is None:
             raise RuntimeError("no build/firmware/micropython-i386: build it with python3 tools/firmware.py build")
@@ -320,15 +349,15 @@ def _one(name, heap, info):
     try:
         if name.endswith("_rp2040"):
             r = _one_pico(name, heap, info, tmp)
-        elif name == "frozen_cortex_m":
-            r = run_qemu(_fw("cm3-full"), heap, info=info)
+        elif name in ("frozen_cortex_m", "routing_cortex_m"):
+            r = run_qemu(_fw("cm3-full"), heap, info=info, routing=name == "routing_cortex_m")
         elif name == "loaded_cortex_m":
             with open(seed_store(os.path.join(tmp, "store")), "rb") as f:
                 r = run_qemu(_fw("cm3-full"), heap, info=info, store=f.read())
-        elif name in ("romfs_cortex_m", "mpy_cortex_m"):
+        elif name in ("romfs_cortex_m", "mpy_cortex_m", "romfs_routing_cortex_m"):
             st = Staged(tmp, "armv7m")
             kw = {"rom": st.rom()} if name.startswith("romfs") else {"flash": st.lfs()}
-            r = run_qemu(_fw("cm3-harness"), heap, info=info, **kw)
+            r = run_qemu(_fw("cm3-harness"), heap, info=info, routing="routing" in name, **kw)
         elif name.endswith("_i386"):
             mode = name.split("_")[0]
             st = Staged(tmp, "x86") if mode != "frozen" else None
