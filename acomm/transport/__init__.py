@@ -404,7 +404,8 @@ class Transport:
                 p.misses = 0
                 self.router.stall(p.link, p.hop, now)
                 if rt is not None:
-                    rt.hop_failed(now, p.link, p.hop)
+                    # the stall's window: the unanswered polls' waits
+                    rt.hop_failed(now, p.link, p.hop, _STALL_POLLS * self._sack_timeout(p))
                 r = self.router.choose(p.final, p.size, p.prio, p.medium, now)
                 # elsewhere: another link, or (learning routes) another hop or a search to wait for
                 if (r is not None and (r[0] is not p.link or r[1] != p.hop)) or (r is None and rt is not None):

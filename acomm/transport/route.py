@@ -26,8 +26,9 @@
 # heard there, else the learned route's next hop when that route leaves by
 # this link, else the link is no candidate. Next come the links that do
 # not route (satellite: the destination is the hop there). When none of
-# these can carry it, a search starts and the packet waits for it; once the
-# search gives up, a direct try on every link is the fallback (the old rule).
+# these can carry it, a search starts and the packet waits for its route
+# (until it expires): a destination in range answers the search itself,
+# so a blind direct try would only spend airtime.
 
 from ..compat import const, ticks_diff
 
@@ -92,13 +93,13 @@ class Router:
         rt = self.routing
         if rt is None or hop != final:
             return self._best(hop, size, priority, medium, now, _DIRECT)
-        # learned routes first, then the links that do not route (satellite),
-        # then, once a search has given up, a direct try everywhere
+        # learned routes first, then the links that do not route (satellite);
+        # else a search, and the packet waits for its route
         r = self._best(final, size, priority, medium, now, _LEARNED)
         if r is None:
             r = self._best(final, size, priority, medium, now, _UNROUTED)
-            if r is None and not rt.search(now, final):
-                r = self._best(final, size, priority, medium, now, _DIRECT)
+            if r is None:
+                rt.search(now, final)
         return r
 
     def _best(self, final, size, priority, medium, now, mode):

@@ -128,6 +128,15 @@ class RouteTable:
             r[SEQ] = (r[SEQ] + 1) % SEQ_MOD
         return dest, r[SEQ]
 
+    def refresh(self, now, next_hop, link, lifetime_ms):
+        """The hop answered on link: its live routes last lifetime_ms from now at least (AODV's
+        active routes: a route in use does not expire under its traffic)."""
+        t = ticks_add(now, lifetime_ms)
+        for d in self.routes:
+            r = self.routes[d]
+            if r[NEXT] == next_hop and r[LINK] == link and self._live(now, r):
+                r[EXPIRES] = _later(r[EXPIRES], t)
+
     def invalidate(self, now, next_hop, link=None):
         """The hop is gone (on `link`, or on any): its routes turn invalid. -> [(dest, seq)] to
         name in a route error."""

@@ -31,6 +31,7 @@ from .routetable import RouteTable
 
 _CONTROL = const(4)  # acomm.frame.CONTROL
 _AVAILABLE = const(1)
+_UNAVAILABLE = const(2)
 _UNKNOWN_ETX16 = const(32)
 _CONTROL_PRIORITY = const(3)
 _CONTROL_LIFESPAN_S = const(30)
@@ -39,7 +40,7 @@ _MAX_HELD = const(16)  # rebroadcasts waiting for their jitter; more are dropped
 
 class Routing:
     def __init__(self, node_id, names, links, next_id, media=("acoustic",), capacity=32, tries=3,
-                 search_ms=60000, hold_ms=300000, lifetime_ms=600000, jitter_ms=None, seed=None):
+                 search_ms=60000, hold_ms=60000, lifetime_ms=600000, jitter_ms=None, seed=None):
         """links: name -> Link (the node's, read live); next_id(): a fresh link request id."""
         self.names = names
         self.node_links = links
@@ -87,6 +88,10 @@ class Routing:
         r = self.table.lookup(now, final)
         if r is not None and r[1] != link.name:
             r = None
+        if r is not None and link.discovery.state(r[0]) == _UNAVAILABLE:
+            # discovery has missed the hop's adverts: the route is broken, and says so
+            self.finder.hop_failed(now, r[0], link.name)
+            r = None
         if link.discovery.state(final) == _AVAILABLE:
             # heard directly; a poor direct link loses to a cheaper learned route
             if r is None or r[0] == final or self.hop_cost(now, link.name, final) <= r[2]:
@@ -94,14 +99,11 @@ class Routing:
         return None if r is None else r[0]
 
     def search(self, now, final):
-        """No routing link has a way to final: start (or keep) its search. -> True while one runs
-        (the packet should wait for it), False when the last one gave up (other links may try)."""
-        f = self.finder
+        """No link has a way to final: start (or keep) its search, unless the last one gave up
+        within hold_ms (the packet waits either way)."""
         self._sync_links()
-        if not f.links:
-            return False
-        f.find(now, final)
-        return f.searching(final)
+        if self.finder.links:
+            self.finder.find(now, final)
 
     def learn(self, now, link, origin, hop):
         """Traffic from origin came in by hop on link: a route back to origin, for free."""
@@ -114,11 +116,20 @@ class Routing:
         (the transport's stall) also call hop_failed."""
         if self.routes_on(link):
             self.neighbours(link).attempt(now, hop, answered)
+            if answered:
+                self.table.refresh(now, hop, link.name, self.finder.lifetime_ms)
 
-    def hop_failed(self, now, link, hop):
-        """hop stopped answering on link: routes through it turn invalid and an error goes out."""
-        if self.routes_on(link):
-            self.finder.hop_failed(now, hop, link.name)
+    def hop_failed(self, now, link, hop, window_ms):
+        """hop did not answer on link for window_ms: unless it was heard within that window and an
+        advert period (alive: its answers were lost to collisions, and the transfer goes on
+        trying), routes through it turn invalid and an error goes out. -> True when they did."""
+        if not self.routes_on(link):
+            return False
+        heard = link.discovery.last_heard(hop)
+        if heard is not None and ticks_diff(now, heard) < window_ms + link.discovery.period_ms:
+            return False
+        self.finder.hop_failed(now, hop, link.name)
+        return True
 
     # -- control frames ----------------------------------------------------------------------
     def heard(self, now, link, src, payload):

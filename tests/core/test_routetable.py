@@ -79,3 +79,15 @@ def test_bad_offers_raise():
     assert raises(AcommError, rt.offer, T0, 255, 1, "acoustic", 16, 1, LIFE)
     assert raises(AcommError, rt.offer, T0, 5, 1, "acoustic", -1, 1, LIFE)
     assert raises(AcommError, rt.offer, T0, 5, 1, "acoustic", 16, 65535, LIFE)  # unknown on the water
+
+
+def test_refresh_keeps_the_routes_through_an_answering_hop():
+    t = RouteTable()
+    t.offer(0, 9, 2, "acoustic", 100, 5, 1000)
+    t.offer(0, 8, 3, "acoustic", 100, 5, 1000)
+    t.offer(0, 7, 2, "satellite", 100, 5, 1000)
+    t.refresh(900, 2, "acoustic", 1000)
+    assert t.lookup(1500, 9) is not None  # refreshed to 1900
+    assert t.lookup(1500, 8) is None and t.lookup(1500, 7) is None  # another hop, another link
+    t.refresh(3000, 2, "acoustic", 1000)  # dead routes stay dead
+    assert t.lookup(3100, 9) is None

@@ -39,6 +39,7 @@ from acomm.drivers.transparent import TransparentDriver
 from acomm.drivers.mac import MacDriver
 from acomm.drivers.registry import driver_class
 from acomm.node import Node
+from acomm.link.names import NameTable
 
 from . import idlesteps
 from .channel import Channel
@@ -275,6 +276,9 @@ class World:
         self._by_station = {}  # id(emulator) -> SimNode
         self.channel.receivers = []
 
+    # each node's name table holds this many (with share_names, every node's name is in every table)
+    names_capacity = 64
+
     def now(self):
         return self.clock()
 
@@ -285,7 +289,7 @@ class World:
         driver = MODEMS[modem][0](addr, dict(driver_opts or {}))
         emu, host, dev = self.modem_ends(modem, addr, emu_opts, position)
         sn = SimNode(name, None, None, None, host, dev, addr)
-        node = Node(name, node_id, self.clock, listener=listener or sn.events.append)
+        node = Node(name, node_id, self.clock, names=NameTable(self.names_capacity), listener=listener or sn.events.append)
         for other in self._order if self.share_names else ():
             node.names.add(other.name, other.node.node_id)
             other.node.names.add(name, node_id)

@@ -51,8 +51,11 @@ BENCHES = {
     # seed 004's teleoperation through `acomm bridge mavlink`: a GCS's stick
     # to an autopilot over the seed's modems (simulated) and emulated SeaTracs
     "mavlink": "mavlink_workload",
+    # multi-hop routing in the simulated ocean, learned against flooding and an
+    # oracle, 4 scenarios x 5 seeds: many minutes of wall time, so not in `all`
+    "routing": "routing_workload",
 }
-NOT_IN_ALL = ("compare", "soak", "attack", "sweep", "board")
+NOT_IN_ALL = ("compare", "soak", "attack", "sweep", "board", "routing")
 
 
 def workload(name):
