@@ -3,8 +3,13 @@
 # Attack, whose attributes it uses: eve (acomm_sim.attacker.Attacker), rng,
 # tries and won (per kind), recorded and before_restart (sealed frames
 # heard), pids, forged and sealed_tries (what it sent, for the spies), out
-# (packets waiting for the channel), restarted, sn (the nodes).
+# (packets waiting for the channel), restarted, sn (the nodes); for the
+# route attacks route_rng, route_recorded and route_before_restart (sealed
+# route control heard), route_tries and forged_requests (what it sent).
 from acomm import frame as fr
+from acomm.compat import ticks_diff
+from acomm.transport import routewire as W
+from acomm.transport.routetable import EXPIRES, NEXT, SEQ, VALID
 from acomm.transport import segment as sg
 from acomm.catalog import teleop
 from acomm.codec.compress import compress
@@ -14,6 +19,15 @@ from ...demo.places import ADDR, AUV, BUOY, DIVER
 
 NAMES = (BUOY, DIVER, AUV)
 EVE = 14  # the attacker's own beacon id
+ROUTE_HOPS = tuple(range(5, 14))  # made-up neighbours forged route requests come from
+ROUTE_ORIGINS = tuple(range(20, 60))  # made-up origins of forged route requests
+
+
+def unsealed(payload):
+    # a sealed frame's payload -> the message, without its counter and tag (and, in the first
+    # frames of an epoch, the counter and epoch announced in the clear before them)
+    n = 14 if len(payload) >= 14 and payload[-7:-4] == b"\0\0\0" else 7
+    return payload[:-n]
 
 
 def _split(data):
@@ -38,9 +52,11 @@ class Forger:
             return
         ftype, seq, flags, body = f
         if flags & fr.F_AUTH:
-            self.recorded.append((p.src, p.dst, p.data))
-            if len(self.recorded) > 40:
-                self.recorded.pop(0)
+            # route control apart, for route_replay: the other replays keep their own mix
+            rec = self.route_recorded if ftype == fr.CONTROL else self.recorded
+            rec.append((p.src, p.dst, p.data))
+            if len(rec) > 40:
+                rec.pop(0)
         if ftype == fr.DATA and p.mtype in (sc.MSG_REQ, sc.MSG_REQU, sc.MSG_REQX):
             # after the beacon's own reply would have ended (not to jam it:
             # a jammer needs no key), before the asker gives up on it
@@ -122,7 +138,102 @@ class Forger:
             bomb += compress(bytes(100))[2:]
             self._forge(now + 4500, 5 + r.below(9), victim, fr.encode_elided(fr.Frame(
                 fr.SEGMENT, 0, 0, h, first + sg.packet_header(2, len(bomb), True) + bomb)), "oversize")
+            self._route_attacks(now + 5000, minute)
         self._flush(now)
+
+    def _control(self, when, src, dst, payload, kind, seal=False):
+        # a forged route control frame, unsealed or with F_AUTH and a made-up counter and tag
+        r = self.route_rng
+        if seal:
+            data = fr.encode_elided(fr.Frame(fr.CONTROL, 0, 0, r.below(16), payload + r.bytes(7), fr.F_AUTH))
+        else:
+            data = fr.encode_elided(fr.Frame(fr.CONTROL, 0, 0, r.below(16), payload))
+        self._forge(when, src, dst, data, kind)
+
+    def _route_attacks(self, at, minute):
+        # route poisoning and amplification (issue 36), one kind a minute in turn (the attacker's
+        # air is already busy most of each minute: more would leave it no time to hear, and the
+        # forged ACKs and SACKs answer what it hears), unsealed, or with F_AUTH and a made-up
+        # counter and tag, by turns. The attacker is told the nodes' route tables: more than it
+        # needs, since a seal does not hide a payload and it hears the requests and replies that
+        # made them. Its own random numbers: the other attacks draw what they drew before routing
+        r = self.route_rng
+        kind = minute % 5
+        seal = minute // 5 % 2 == 1
+        if kind == 0:
+            # forged replies: a route to another node, fresher and cheaper than any, via the
+            # attacker's beacon, or via the third node (a route that the forgery moves)
+            for k in range(2):
+                victim = NAMES[(minute // 5 + k) % 3]
+                others = [n for n in NAMES if n != victim]
+                dest = others[r.below(2)]
+                via = EVE if k == 0 else ADDR[[n for n in others if n != dest][0]]
+                known = self.table(victim).seq(ADDR[dest])
+                seq = (known + 1 + r.below(1000)) % W.UNKNOWN_SEQ if known >= 0 else r.range(1, 30000)
+                payload = W.encode_reply(ADDR[dest], seq, ADDR[victim], 0, 0, 255 * W.LIFETIME_UNIT_MS)
+                self._control(at + 300 * k, via, ADDR[victim], payload, "route_reply", seal)
+        elif kind == 1:
+            # forged errors from a live route's next hop, naming its destination, number raised
+            live = []
+            now = at - 5000
+            for name in NAMES:
+                t = self.table(name)
+                for d in sorted(t.routes):
+                    e = t.routes[d]
+                    if e[VALID] and ticks_diff(e[EXPIRES], now) > 0 and e[NEXT] in ADDR.values():
+                        live.append((name, d, e[NEXT], e[SEQ]))
+            for k in range(3):
+                if live:
+                    victim, dest, hop, seq = live[r.below(len(live))]
+                else:  # none: a guess
+                    victim = NAMES[(minute // 5 + k) % 3]
+                    dest = hop = ADDR[[n for n in NAMES if n != victim][r.below(2)]]
+                    seq = -1
+                seq = (seq + 1 + r.below(100)) % W.UNKNOWN_SEQ if seq >= 0 else r.below(30000)
+                dst = ADDR[victim] if k == 0 else sc.BEACON_ALL  # errors go to all; one to the node
+                self._control(at + 300 * k, hop, dst, W.encode_error([(dest, seq)]), "route_error", seal)
+        elif kind == 2:
+            # forged requests from made-up origins by made-up neighbours, for a made-up node
+            # (every node would pass it on) and for a real one (which would answer)
+            for k in range(2):
+                origin = ROUTE_ORIGINS[r.below(len(ROUTE_ORIGINS))]
+                rid = r.below(256)
+                dest = ROUTE_ORIGINS[r.below(len(ROUTE_ORIGINS))] if k == 0 else ADDR[NAMES[minute // 5 % 3]]
+                self.forged_requests.add((origin, rid))
+                payload = W.encode_request(rid, origin, r.range(1, 30000), dest, W.UNKNOWN_SEQ, r.below(3),
+                                           r.below(64))
+                self._control(at + 300 * k, ROUTE_HOPS[r.below(len(ROUTE_HOPS))], sc.BEACON_ALL, payload,
+                              "route_request_flood", seal)
+        elif kind == 3:
+            # forged floods (acomm.transport.flood) from made-up origins: every node would hand
+            # them to its application and pass them on
+            for k in range(2):
+                origin = ROUTE_ORIGINS[r.below(len(ROUTE_ORIGINS))]
+                payload = W.encode_flood(origin, r.below(256), r.below(3), b"all surface " + r.bytes(2))
+                self._control(at + 300 * k, ROUTE_HOPS[r.below(len(ROUTE_HOPS))], sc.BEACON_ALL, payload,
+                              "route_flood", seal)
+        else:
+            # replays of sealed route control heard: as heard, to another node, stripped of its
+            # seal (what open mode would take); after the AUV's restart, one it heard before
+            # (route_replay_restart)
+            rec = self.route_recorded
+            if rec:
+                src, dst, data = rec[-1 - r.below(min(3, len(rec)))]
+                # one heard before the AUV's restart is a restart replay, whichever list it came from
+                again = "route_replay_restart" if (src, dst, data) in self.route_before_restart else "route_replay"
+                self._forge(at, src, dst, data, again)
+                other = [a for a in ADDR.values() if a not in (src, dst)]
+                self._forge(at + 300, src, other[r.below(len(other))], data, "route_replay")
+                f = fr.decode_elided(data, 0, 0)
+                self._forge(at + 600, src, dst, fr.encode_elided(fr.Frame(
+                    f.ftype, 0, 0, f.seq, unsealed(f.payload), f.flags & ~fr.F_AUTH)), "route_replay")
+            if self.restarted and self.route_before_restart:
+                old = self.route_before_restart  # those to the AUV or to all
+                src, dst, data = old[minute // 5 % len(old)]
+                self._forge(at + 900, src, dst, data, "route_replay_restart")
+
+    def table(self, name):
+        return self.sn[name].node.transport.router.routing.table
 
     def _flush(self, now):
         # one packet on the water at a time: its own packets would collide
@@ -135,6 +246,8 @@ class Forger:
             self.tries[kind] += 1
             if kind.startswith("replay") or kind == "tag_guess":
                 self.sealed_tries[(dst, data)] = kind
+            elif kind.startswith("route"):
+                self.route_tries[data] = (kind, self.tries[kind])  # a success counts once a send
             self.busy_until = self.eve.send(now, src, dst, data)
             if kind == "advert":
                 self._check_adverts_at = now + 10000

@@ -30,6 +30,29 @@
 #   flood           fragment 0s from 9 made-up sources on both lanes
 #   oversize        a fragment 0 announcing a 2 MiB packet, and a
 #                   compressed body announcing 1 MiB (decompression bomb)
+#   route_reply     a route reply to a node for another, fresher (a higher
+#                   sequence number) and cheaper than any it holds, via the
+#                   attacker's beacon or via the third node
+#   route_error     a route error from a live route's next hop naming its
+#                   destination, with a raised sequence number
+#   route_request_flood
+#                   route requests from made-up origins by made-up
+#                   neighbours, for a made-up node (every node would pass it
+#                   on) or a real one (which would answer)
+#   route_flood     floods (acomm.transport.flood) from made-up origins
+#   route_replay    sealed route control heard, again as heard, to another
+#                   node, and stripped of its seal
+#   route_replay_restart
+#                   sealed route control to the AUV (or to all) heard before
+#                   its restart, after it
+#   (one route kind a minute in turn, two or three frames; unsealed, or
+#   with F_AUTH and a made-up counter and tag, by turns)
+#
+# Every node routes (Transport(routing=True)). The demo's nodes all hear
+# each other, so no packet needs a route; for the route attacks to have
+# something to aim at, each node's router is asked every 40 s for a route to
+# another node in turn (Routing.search: a request, its rebroadcast, a
+# reply), so every table holds live routes (10 minutes each).
 #
 # Figures per kind: attack_<kind>_tries and attack_<kind>_succeeded, where
 # success is what the attack is for: ack, a thrust command reported
@@ -41,8 +64,19 @@
 # replay_* and tag_guess, a frame the key took for the second time
 # (or, for a guess, at all) and that reached an application again; flood, a legitimate sealed transfer refused
 # "receiver full"; oversize, a node that stopped (an exception out of its
-# step) or reassembly memory past its bound. Then the legitimate traffic:
-# packets lost and duplicated (the ledger's rules), commands lost.
+# step) or reassembly memory past its bound; route_reply, route_error,
+# route_request_flood and route_flood, a forged frame after which a node
+# that took it held another route table (a route added, moved, refreshed or
+# invalidated), passed something on (a rebroadcast, a reply, an error) or
+# handed a flood to its application (counted once a frame); route_replay*,
+# the same for a frame whose content the node had taken before (a replay
+# that arrived before its lost original only delivered it). Besides,
+# attack_route_request_flood_amplification and
+# attack_route_flood_amplification: control frames the nodes sent for the
+# forged requests (rebroadcasts, replies to their made-up origins) or floods
+# per forged frame. Then the legitimate traffic: packets lost and duplicated
+# (the ledger's rules), delivered, reported expired (the attacker's air
+# jams as well: a jammer needs no key), commands lost.
 import os
 import shutil
 import tempfile
@@ -58,13 +92,14 @@ from acomm.drivers.mac import Tdma
 from acomm.prng import Prng
 from acomm.transport import Transport
 from acomm.transport import _MAX_RX
+from acomm.transport import routewire as W
 from acomm_sim.attacker import Attacker
 from acomm_sim.channel import Channel
 from acomm_sim.ledger import Ledger
 from acomm_sim.world import World
 
 from ...demo.places import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
-from .attack_eve import EVE, NAMES, Forger
+from .attack_eve import EVE, NAMES, ROUTE_ORIGINS, Forger, unsealed
 from .soak_workload import payload
 
 KEY = bytes(range(7, 39))  # the bench's network key (32 bytes)
@@ -74,15 +109,23 @@ TX_MS = 3000
 EVE_AT = (25.0, 15.0, 3.0)
 FAR = (5000.0, 0.0, 6.0)  # the AUV out of range
 KINDS = ("ack", "sack_complete", "sack_bitmap", "sack_refusal", "advert", "replay_same", "replay_other",
-         "replay_restart", "tag_guess", "flood", "oversize")
+         "replay_restart", "tag_guess", "flood", "oversize", "route_reply", "route_error", "route_request_flood",
+         "route_flood", "route_replay", "route_replay_restart")
+BY_ADDR = dict((ADDR[n], n) for n in NAMES)
+# the legitimate route searches: (from, to), one every 40 s in turn
+SEARCHES = ((BUOY, AUV), (DIVER, BUOY), (AUV, DIVER), (BUOY, DIVER), (DIVER, AUV), (AUV, BUOY))
 MINUTES = 60
 RESTART_MS = 35 * 60000
 LIFESPAN_S = 3000
 
 
 class Attack(Forger):
-    def __init__(self, strict=True, seed=1, minutes=MINUTES):
+    def __init__(self, strict=True, seed=1, minutes=MINUTES, lifespan_s=LIFESPAN_S, restart_ms=RESTART_MS):
+        """lifespan_s: the legitimate packets' (the drain lasts until the last is settled);
+        restart_ms: when the AUV restarts its key state. A shorter run (a test) may shorten both."""
         self.strict = strict
+        self.lifespan_s = lifespan_s
+        self.restart_ms = restart_ms
         self.dir = tempfile.mkdtemp(prefix="acomm-attack-")
         self.channel = Channel(seed=seed, loss_curve=LOSS_CURVE)
         self.w = w = World(seed=seed, channel=self.channel, step_ms=20, max_quiet_ms=200)
@@ -102,11 +145,24 @@ class Attack(Forger):
                        link_opts={"advert_period_ms": 60000, "queue_capacity": 64, "max_retries": 100},
                        listener=self._listener(name))
             sn.node.set_auth(Auth(KEY, path=self._counters(name)), commands(), strict=strict)
-            Transport.of(sn.node, wall=lambda: w.now() // 1000)
+            Transport.of(sn.node, wall=lambda: w.now() // 1000, routing=True)
             sn.step = self._stepper(sn)
             self.sn[name] = sn
+        self.route_rng = Prng(seed * 31 + 7)
+        self.route_recorded = []  # (src, dst, bytes) sealed route control heard, the latest 40
+        self.route_before_restart = []
+        self.route_tries = {}  # bytes of a forged or replayed route control frame -> kind
+        self.route_taken = dict((ADDR[n], set()) for n in NAMES)  # (src, control payload) each node took
+        self.route_first_copies = 0
+        self.route_won = set()  # (kind, try) that succeeded
+        self.forged_requests = set()  # (origin, request id)
+        self.amplified = 0  # control frames the nodes sent for forged requests
+        self.flood_amplified = 0  # and for forged floods
+        self.floods_handed = 0
+        self.search_turn = 0
         self._spy_sacks()
         self._spy_sealed()
+        self._spy_routes()
         self.eve = Attacker(self.channel, EVE, EVE_AT, self._heard)
         self.recorded = []  # (src, dst, bytes) sealed frames heard, the latest 40
         self.before_restart = []
@@ -156,6 +212,9 @@ class Attack(Forger):
                     self.won["sack_refusal"] += 1
             elif code == EV_PACKET:
                 data = ev[3]
+                if ev[2] == "*":
+                    self.floods_handed += 1  # a flood: nobody with the key sends one here
+                    return
                 if ev[2] != name or len(data) < 4:
                     led.delivered(-1, False)
                     return
@@ -214,10 +273,17 @@ class Attack(Forger):
 
             def spy(now, src_addr, dst_addr, data, link=link, on_rx=on_rx, me=ADDR[name], seen=seen):
                 kind = self.sealed_tries.get((me, bytes(data)))
+                rtry = self.route_tries.get(bytes(data))
+                if rtry is not None:
+                    before = self._route_state(me)
+                    known = (src_addr, _control_body(data)) in self.route_taken[me]
                 auth = link.framing.auth
                 opened = auth.stats["opened"]
                 handed = self.handed[me]
                 on_rx(now, src_addr, dst_addr, data)
+                if rtry is not None:
+                    self._route_outcome(rtry, before, self._route_state(me), known,
+                                        auth.stats["opened"] > opened and (src_addr, bytes(data[-7:])) in seen)
                 if auth.stats["opened"] == opened:
                     return
                 sig = (src_addr, bytes(data[-7:]))
@@ -236,6 +302,59 @@ class Attack(Forger):
 
             link._on_rx = spy
 
+    def _routing(self, addr):
+        return self.sn[BY_ADDR[addr]].node.transport.router.routing
+
+    def _route_state(self, me):
+        # what a route control frame can change at node me: its routes (all but when last used),
+        # and what it passed on
+        rt = self._routing(me)
+        st = rt.finder.stats
+        t = rt.table.routes
+        return (dict((d, tuple(t[d][:6])) for d in t), st["rebroadcasts"], st["replies"], st["errors"],
+                rt.flooder.stats["delivered"], self.handed[me])
+
+    def _route_outcome(self, rtry, before, after, known, again):
+        # a forged or replayed route control frame taken by a node: it succeeds when the node's
+        # routes or what it passed on changed, once a send however many nodes took it; a replay
+        # only on content the node had taken before (else it only delivered a lost original)
+        kind = rtry[0]
+        replay = kind.startswith("route_replay")
+        if replay and again:
+            self.taken_again[kind] = self.taken_again.get(kind, 0) + 1  # a seal opened twice
+        if before == after:
+            return
+        if replay and not known:
+            self.route_first_copies += 1
+        elif rtry not in self.route_won:
+            self.route_won.add(rtry)
+            self.won[kind] += 1
+
+    def _spy_routes(self):
+        # the route control each node took (a replay succeeds only on content taken before), and
+        # the control frames it sent for forged requests (the amplification)
+        for name in NAMES:
+            t = self.sn[name].node.transport
+            rt = t.router.routing
+            taken = self.route_taken[ADDR[name]]
+
+            def on_control(now, link, src, payload, *authed, on_control=t.on_control, taken=taken):
+                on_control(now, link, src, payload, *authed)
+                taken.add((src, bytes(payload)))
+
+            def send(now, link_name, to, payload, rt=rt, send=rt._send):
+                sent = rt.stats["control_sent"]
+                send(now, link_name, to, payload)
+                if rt.stats["control_sent"] > sent:
+                    k = _answers_forgery(payload, self.forged_requests)
+                    if k == "flood":
+                        self.flood_amplified += 1
+                    elif k:
+                        self.amplified += 1
+
+            t.on_control = on_control
+            rt._send = send
+
     # -- legitimate traffic ------------------------------------------------------------
     def poll(self, now):
         # every 40 s a packet between a pair; every 80 s a thrust command
@@ -245,10 +364,14 @@ class Attack(Forger):
         led = self.ledger
         seq = led.begin(ADDR[src])
         size = r.range(6, 26) if r.chance(0.6) else r.range(40, 160)
-        pid = self.sn[src].node.transport.send(now, dst, payload(seq, size), LIFESPAN_S, r.range(3, 12))
+        pid = self.sn[src].node.transport.send(now, dst, payload(seq, size), self.lifespan_s, r.range(3, 12))
         led.sent(seq, ADDR[src], pid)
         if (now // 40000) % 2 == 0:
             self._command(now)
+        # a route search (nothing when the node holds a live route to it)
+        a, b = SEARCHES[self.search_turn % len(SEARCHES)]
+        self.search_turn += 1
+        self.sn[a].node.transport.router.routing.search(now, ADDR[b])
         return now + 40000
 
     def _command(self, now):
@@ -272,9 +395,11 @@ class Attack(Forger):
             self.far = far
             pos = FAR if far else START[AUV]
             self.channel.set_position(ADDR[AUV], pos[0], pos[1], pos[2])
-        if not self.restarted and now >= RESTART_MS:
+        if not self.restarted and now >= self.restart_ms:
             self.restarted = True
             self.before_restart = list(self.recorded)
+            # those to the AUV or to all (0)
+            self.route_before_restart = [x for x in self.route_recorded if x[1] in (ADDR[AUV], 0)]
             node = self.sn[AUV].node
             self.refused_before = dict(node.guard.refused)
             node.set_auth(Auth(KEY, path=self._counters(AUV)), commands(), strict=self.strict)
@@ -300,7 +425,7 @@ class Attack(Forger):
         self.far = None
         # the attacker stops too; the legitimate traffic drains
         led = self.ledger
-        limit = w.now() + 2 * LIFESPAN_S * 1000
+        limit = w.now() + 2 * self.lifespan_s * 1000
         while (led.pending() or self.cmd_rids) and w.now() < limit:
             w.run(600000, until=lambda: not led.pending() and not self.cmd_rids)
         return self
@@ -320,6 +445,9 @@ class Attack(Forger):
         f["attack_legit_packets_lost"] = lost
         f["attack_legit_packets_duplicated"] = dups
         f["attack_legit_packets_failed"] = self.ledger.counts["status_failed"]
+        # reported expired: the attacker's air is jamming too (a jammer needs no key)
+        f["attack_legit_packets_expired"] = self.ledger.counts["status_expired"]
+        f["attack_legit_packets_delivered"] = self.ledger.counts["delivered"]
         f["attack_legit_commands_sent"] = len(self.commands)
         f["attack_legit_commands_lost"] = sum(1 for c in self.commands.values() if not c[2] and c[3] not in (
             EXPIRED, FAILED))
@@ -329,6 +457,17 @@ class Attack(Forger):
         f["attack_replay_first_copies"] = self.first_copies
         for k in sorted(self.taken_again):
             f["attack_%s_frames_taken_again" % k] = self.taken_again[k]
+        n = self.tries["route_request_flood"]
+        f["attack_route_request_flood_amplification"] = round(self.amplified / n, 3) if n else 0
+        n = self.tries["route_flood"]
+        f["attack_route_flood_amplification"] = round(self.flood_amplified / n, 3) if n else 0
+        f["attack_route_floods_handed"] = self.floods_handed
+        f["attack_route_replay_first_copies"] = self.route_first_copies
+        # routes left at the end whose next hop is the attacker's beacon
+        f["attack_routes_via_attacker"] = sum(1 for n in NAMES for e in self._routing(ADDR[n]).table.routes.values()
+                                              if e[0] == EVE)
+        f["attack_legit_route_requests"] = sum(self._routing(ADDR[n]).finder.stats["requests"] for n in NAMES)
+        f["attack_legit_route_control_sent"] = sum(self._routing(ADDR[n]).stats["control_sent"] for n in NAMES)
         f["attack_node_deaths"] = self.deaths
         f["attack_max_reassembly_bytes"] = self.max_rx_bytes
         refused = dict(self.refused_before)
@@ -343,7 +482,33 @@ class Attack(Forger):
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
-UNITS = {"attack_max_reassembly_bytes": "B"}
+UNITS = {"attack_max_reassembly_bytes": "B", "attack_route_request_flood_amplification": "x",
+         "attack_route_flood_amplification": "x"}
+
+
+def _control_body(data):
+    # a CONTROL frame on the water -> its payload without a seal's trailer (None for other frames)
+    try:
+        f = fr.decode_elided(data, 0, 0)
+    except Exception:
+        return None
+    return unsealed(f.payload) if f.flags & fr.F_AUTH else bytes(f.payload)
+
+
+def _answers_forgery(payload, forged):
+    # a control frame a node sent because of a forged request: its rebroadcast, or a reply to (or
+    # an error naming) a made-up origin
+    try:
+        m = W.decode(payload)
+    except Exception:
+        return False
+    if m[0] == "request":
+        return (m[2], m[1]) in forged
+    if m[0] == "reply":
+        return m[3] in ROUTE_ORIGINS
+    if m[0] == "error":
+        return any(d in ROUTE_ORIGINS for d, _ in m[1])
+    return "flood" if m[1] in ROUTE_ORIGINS else False
 
 
 def run(emit, open_mode=False, quick=False):
