@@ -595,9 +595,17 @@ class Link:
                 self._emit((_EV_SEGMENT, self, src, dst, f.seq, f.payload, f.authed))
             return
         if f.ftype == fr.CONTROL:
-            # route control (acomm.transport.routing): the transport's too
-            if mine:
-                self._emit((_EV_CONTROL, self, src, f.payload, f.authed))
+            # route control (acomm.transport.routing): the transport's too. A reply to one
+            # neighbour asks for an acknowledgement, so a copy sent again is dropped here
+            if not mine:
+                return
+            if f.flags & fr.F_ACK_REQ and dst is not None:
+                if len(self._pending_acks) < _MAX_PENDING_ACKS:
+                    self._pending_acks.append((src, f.seq))
+                if self._dups.seen(src * 257 + dst, f.seq, now):
+                    self.stats["rx_duplicates"] += 1
+                    return
+            self._emit((_EV_CONTROL, self, src, f.payload, f.authed))
             return
         data = f.ftype == fr.DATA or f.ftype == fr.REPLY
         if not mine:

@@ -460,7 +460,7 @@ class Transport:
         if self._sack_status(now, rid, status):
             return True
         rt = self.router.routing
-        if rt is not None and rt.on_link_status(rid, status >= _TRANSMITTED):
+        if rt is not None and rt.on_link_status(now, rid, status):
             return True
         r = self._reqs.get(rid)
         if r is None:

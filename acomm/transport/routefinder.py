@@ -144,13 +144,18 @@ class RouteFinder:
 
     def _on_request(self, now, link, hop, m):
         _, rid, origin, oseq, dest, dseq, hops, cost = m
-        if origin == self.node_id or (origin, rid) in self._seen:
+        if origin == self.node_id:
+            self.stats["duplicates"] += 1
+            return
+        cost = cost + self._cost(now, link, hop)
+        # the reverse route, to the origin through the hop it came by; from every copy, not only
+        # the first: the first to arrive is the luckiest draw of the jitter, often a detour, and
+        # the reply, which goes back by these routes, is lost more often the more hops it takes
+        self.table.offer(now, origin, hop, link, cost, oseq, self.lifetime_ms)
+        if (origin, rid) in self._seen:
             self.stats["duplicates"] += 1
             return
         self._remember((origin, rid))
-        cost = cost + self._cost(now, link, hop)
-        # the reverse route, to the origin through the hop it came by
-        self.table.offer(now, origin, hop, link, cost, oseq, self.lifetime_ms)
         if hop != origin:
             self.table.offer(now, hop, hop, link, self._cost(now, link, hop), -1, self.lifetime_ms)
         if dest == self.node_id:

@@ -32,6 +32,9 @@ from .routetable import RouteTable
 _CONTROL = const(4)  # acomm.frame.CONTROL
 _AVAILABLE = const(1)
 _UNAVAILABLE = const(2)
+_TRANSMITTED = const(4)
+_FAILED = const(8)
+_REPLY_KIND = const(2)  # acomm.transport.routewire.REPLY
 _UNKNOWN_ETX16 = const(32)
 _CONTROL_PRIORITY = const(3)
 _CONTROL_LIFESPAN_S = const(30)
@@ -55,7 +58,7 @@ class Routing:
         self._auto_jitter = jitter_ms is None
         self._held = []  # (not before, link name, to, payload)
         self._rids = {}  # link request id -> (link name, hop id or None): the control frames' statuses
-        self.stats = {"control_sent": 0, "control_bytes": 0, "control_dropped": 0}
+        self.stats = {"control_sent": 0, "control_bytes": 0, "control_dropped": 0, "replies_rerouted": 0}
 
     # -- links and costs ------------------------------------------------------------------
     def routes_on(self, link):
@@ -196,25 +199,45 @@ class Routing:
                 self._send(now, item[1], item[2], item[3])
         self._held = keep
 
-    def _send(self, now, link_name, to, payload):
+    def _send(self, now, link_name, to, payload, again=False):
         link = self.node_links.get(link_name)
         if link is None:
             return
         rid = self._next_id()
         dst = "*" if to == BROADCAST else self.names.name_of(to)  # acomm.link.BROADCAST
-        # known before the request: its first status comes from inside request()
-        self._rids[rid] = (link_name, None if to == BROADCAST else to)
-        if link.request(now, rid, dst, payload, _CONTROL_LIFESPAN_S, _CONTROL_PRIORITY, ftype=_CONTROL):
+        # known before the request: its first status comes from inside request(); a unicast
+        # keeps its payload, to go another way if this hop never acknowledges it
+        self._rids[rid] = None if to == BROADCAST else (link_name, to, payload, again)
+        # a reply or an error to one neighbour asks for the link's acknowledgement (and its
+        # retries): a reply lost on one hop of many would cost the whole search again
+        if link.request(now, rid, dst, payload, _CONTROL_LIFESPAN_S, _CONTROL_PRIORITY, ack=to != BROADCAST,
+                        ftype=_CONTROL):
             self.stats["control_sent"] += 1
             self.stats["control_bytes"] += len(payload)
         else:
             self._rids.pop(rid, None)
             self.stats["control_dropped"] += 1
 
-    def on_link_status(self, rid, final):
-        """-> True when rid was a control frame's request (its statuses stop here)."""
+    def on_link_status(self, now, rid, status):
+        """A link request's status -> True when it was a control frame's (its statuses stop here).
+        A reply the hop never acknowledged goes once more, by the route the table now holds back to
+        its origin, when that leaves by another hop (later copies of the request may have taught it
+        one)."""
         if rid not in self._rids:
             return False
-        if final:
-            del self._rids[rid]
+        if status < _TRANSMITTED:
+            return True
+        e = self._rids.pop(rid)
+        if e is None or status != _FAILED:
+            return True
+        link_name, hop, payload, again = e
+        link = self.node_links.get(link_name)
+        if link is not None:
+            self.attempt(now, link, hop, False)
+        if again or payload[0] >> 6 != _REPLY_KIND:
+            return True
+        r = self.table.lookup(now, payload[4])  # a reply's origin (acomm.transport.routewire)
+        if r is not None and (r[0] != hop or r[1] != link_name):
+            self.stats["replies_rerouted"] += 1
+            self._send(now, r[1], r[0], payload, True)
         return True

@@ -152,3 +152,26 @@ def test_no_loops_after_random_breaks_and_searches():
                         routed += 1
         found += sum(1 for e in net.events if e[1] == "found")
     assert found >= 12 and routed >= 200  # the searches did find routes, and many stood
+
+
+def test_a_cheaper_later_copy_of_a_request_moves_the_reverse_route():
+    from acomm.transport import routewire as W
+
+    t = RouteTable()
+    f = RouteFinder(5, t, lambda now, link, hop: 16, jitter_ms=0)
+    f.heard(0, "acoustic", 2, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 4, 900))  # first, a detour
+    assert t.lookup(0, 9)[:2] == (2, "acoustic") and f.stats["rebroadcasts"] == 1
+    f.heard(10, "acoustic", 3, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 1, 100))  # a copy, cheaper
+    assert t.lookup(10, 9) == (3, "acoustic", 116)  # the reply will go back the cheap way
+    assert f.stats["rebroadcasts"] == 1 and f.stats["duplicates"] == 1  # still passed on once
+    f.heard(20, "acoustic", 4, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 2, 500))  # dearer: no change
+    assert t.lookup(20, 9)[0] == 3
+
+
+def test_a_flood_payload_is_not_taken_for_route_control():
+    from acomm.transport import routewire as W
+
+    t = RouteTable()
+    f = RouteFinder(5, t, lambda now, link, hop: 16)
+    f.heard(0, "acoustic", 2, W.encode_flood(9, 1, 0, b"all up"))
+    assert f.stats["bad"] == 1 and not f.take() and not t.routes

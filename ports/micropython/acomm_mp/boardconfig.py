@@ -151,13 +151,10 @@ def _auth(a):
     return out
 
 
-# acomm.transport.routing.Routing's options a board config may set (ints, but media)
-_ROUTING = {"capacity": (1, 254), "tries": (1, 10), "search_ms": (1000, 3600000), "hold_ms": (0, 86400000),
-            "lifetime_ms": (1000, 86400000), "jitter_ms": (0, 600000), "seed": (0, 0x7FFFFFFF)}
-
-
 def _routing(r):
-    # learned routes (acomm.transport.routing): False/None (absent), True or a dict of options
+    # learned routes (acomm.transport.routing): False/None (absent), True or a dict of its options;
+    # the names in a tuple literal, not a module-level table: a constant in the bytecode costs a
+    # frozen board no heap, and a dict of ranges cost the buoy's boot 1.5 KB (heap_min_frozen_cortex_m)
     if r is None or r is False:
         return None
     if r is True:
@@ -171,11 +168,16 @@ def _routing(r):
             if not isinstance(m, (list, tuple)) or not m or not all(isinstance(x, str) and x for x in m):
                 _fail("routing.media", "a non-empty list of link media or names", m)
             out[k] = tuple(m)
-        elif k in _ROUTING:
-            lo, hi = _ROUTING[k]
-            out[k] = _int(r, k, lo, hi, "routing." + k)
         else:
-            _fail("routing", "Routing options among media, " + ", ".join(sorted(_ROUTING)), k)
+            for name, lo, hi in (("capacity", 1, 254), ("tries", 1, 10), ("search_ms", 1000, 3600000),
+                                 ("hold_ms", 0, 86400000), ("lifetime_ms", 1000, 86400000),
+                                 ("jitter_ms", 0, 600000), ("seed", 0, 0x7FFFFFFF)):
+                if k == name:
+                    out[k] = _int(r, k, lo, hi, "routing." + k)
+                    break
+            else:
+                _fail("routing", "Routing options among media, capacity, tries, search_ms, hold_ms, "
+                      "lifetime_ms, jitter_ms, seed", k)
     return out
 
 

@@ -7,8 +7,10 @@
 # Scenarios (nodes RANGE_M apart at most to hear each other):
 #   chain      6 nodes in a line, 5 hops end to end; flows both ways
 #   grid       8 x 8, each node hearing only its 4 neighbours; random pairs
-#   random     64 nodes at random in a square of constant density, plus two
-#              AUVs crossing it; random pairs, and the AUVs to and from n1
+#   random     64 nodes at random in a square of constant density (about 5
+#              neighbours each; a draw that leaves a node cut off is drawn
+#              again), plus two AUVs crossing it; random pairs, and the AUVs
+#              to and from n1
 #   partition  two ends joined by a relay (2 hops) and a longer way round
 #              (3 hops); the relay dies at minute 10 and comes back at 20
 #   large      `nodes` (default 250) at random, at the random scenario's
@@ -49,7 +51,7 @@ RANGE_M = 200.0
 SPACING_M = 150.0
 # certain within RANGE_M but for 2 %, never beyond it
 LOSS_CURVE = ((0.0, 0.02), (RANGE_M, 0.05), (RANGE_M + 1.0, 1.0))
-DENSITY_M2 = math.pi * RANGE_M * RANGE_M / 8  # area per node: about 8 neighbours each
+DENSITY_M2 = math.pi * RANGE_M * RANGE_M / 5  # area per node: about 5 neighbours each
 PAYLOAD = 16  # a flood carries 18 bytes at most: every way to route gets the same packets
 MODEM = "bpsk"
 ADVERT_MS = 60000
@@ -148,8 +150,14 @@ class RoutedNet:
         return places, self._pairs(64, 8), 120000
 
     def _scatter(self, n):
+        # uniform in a square of constant density, drawn again until every node can reach every
+        # other (a partitioned draw would measure the geometry, not the routing)
         side = math.sqrt(n * DENSITY_M2)
-        return [(self.rng.below(int(side)) * 1.0, self.rng.below(int(side)) * 1.0) for _ in range(n)], side
+        for _ in range(100):
+            places = [(self.rng.below(int(side)) * 1.0, self.rng.below(int(side)) * 1.0) for _ in range(n)]
+            if _connected(places):
+                return places, side
+        raise ValueError("no connected placement of %d nodes in 100 draws" % n)
 
     def _random(self, _):
         places, side = self._scatter(64)
@@ -336,6 +344,18 @@ class RoutedNet:
             if hits:
                 out[key] = (hits[0] - t0) / 1000
         return out
+
+
+def _connected(places):
+    seen = {0}
+    todo = [0]
+    while todo:
+        a = todo.pop()
+        for b in range(len(places)):
+            if b not in seen and math.hypot(places[a][0] - places[b][0], places[a][1] - places[b][1]) <= RANGE_M:
+                seen.add(b)
+                todo.append(b)
+    return len(seen) == len(places)
 
 
 def _dist(a, b):
