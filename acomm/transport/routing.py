@@ -25,7 +25,6 @@
 
 from ..compat import const, ticks_diff
 from ..errors import AcommError
-from .flood import Flooder
 from .routefinder import BROADCAST, RouteFinder
 from .routetable import RouteTable
 
@@ -35,6 +34,7 @@ _UNAVAILABLE = const(2)
 _TRANSMITTED = const(4)
 _FAILED = const(8)
 _REPLY_KIND = const(2)  # acomm.transport.routewire.REPLY
+_FLOOD_KIND = const(0)  # acomm.transport.routewire.FLOOD
 _UNKNOWN_ETX16 = const(32)
 _CONTROL_PRIORITY = const(3)
 _CONTROL_LIFESPAN_S = const(30)
@@ -53,7 +53,8 @@ class Routing:
         self.finder = RouteFinder(node_id, self.table, self.hop_cost, links=(), tries=tries, search_ms=search_ms,
                                   lifetime_ms=lifetime_ms, jitter_ms=jitter_ms or 0, hold_ms=hold_ms,
                                   seed=node_id + 1 if seed is None else seed)
-        self.flooder = Flooder(node_id, links=(), jitter_ms=jitter_ms or 0, seed=node_id + 7 if seed is None else seed + 6)
+        self.flooder = None  # acomm.transport.flood.Flooder, made by the first flood sent or heard
+        self._seed = node_id + 7 if seed is None else seed + 6
         self._nlinks = -1
         self._auto_jitter = jitter_ms is None
         self._held = []  # (not before, link name, to, payload)
@@ -140,8 +141,9 @@ class Routing:
         heard for the first time (else [])."""
         if not self.routes_on(link):
             return ()
-        fl = self.flooder
-        if fl.heard(now, link.name, src, payload):
+        if payload and payload[0] >> 6 == _FLOOD_KIND:
+            fl = self._flooding()
+            fl.heard(now, link.name, src, payload)
             return [(e[1], e[2]) for e in fl.take_events()]
         self.finder.heard(now, link.name, src, payload)
         return ()
@@ -149,16 +151,16 @@ class Routing:
     def flood(self, now, data, hops_limit=None):
         """Floods data to every node (acomm.transport.flood.Flooder.send) -> its id."""
         self._sync_links()
-        if not self.flooder.links:
+        if not self.finder.links:
             raise AcommError("no link floods: none is %s" % " or ".join(self.media))
-        return self.flooder.send(now, data, hops_limit)  # EncodeError (an AcommError) for bad data
+        return self._flooding().send(now, data, hops_limit)  # EncodeError (an AcommError) for bad data
 
     def _sync_links(self):
         # the routing links' names, for the finder's floods (links can be added after the transport)
         links = self.node_links
         if len(links) != self._nlinks:
             self._nlinks = len(links)
-            self.finder.links = self.flooder.links = tuple(n for n in links if self.routes_on(links[n]))
+            self.finder.links = tuple(n for n in links if self.routes_on(links[n]))
         if self._auto_jitter:
             # a rebroadcast waits 0..jitter: wide enough that the neighbours that heard one request
             # seldom start within one short frame of each other (they would collide at the next
@@ -171,7 +173,21 @@ class Routing:
                 k = 2 * (2 + (0 if nb is None else len(nb.table))) * (128000 // bps + 200)
                 if k > j:
                     j = k
-            self.finder.jitter_ms = self.flooder.jitter_ms = j
+            self.finder.jitter_ms = j
+        fl = self.flooder
+        if fl is not None:
+            fl.links = self.finder.links
+            fl.jitter_ms = self.finder.jitter_ms
+
+    def _flooding(self):
+        # the flooder, made on first use: a node that never sees a flood never loads the module
+        fl = self.flooder
+        if fl is None:
+            from .flood import Flooder
+
+            fl = self.flooder = Flooder(self.finder.node_id, links=self.finder.links,
+                                        jitter_ms=self.finder.jitter_ms, seed=self._seed)
+        return fl
 
     def poll(self, now):
         """The finder's retries, and the control frames that are due, onto their links."""
@@ -180,9 +196,10 @@ class Routing:
         f.poll(now)
         f.take_events()  # the waiting packets ask again at the transport's next poll
         fl = self.flooder
-        fl.poll(now)
-        for link_name, to, payload in fl.take():
-            self._send(now, link_name, to, payload)
+        if fl is not None:
+            fl.poll(now)
+            for link_name, to, payload in fl.take():
+                self._send(now, link_name, to, payload)
         held = self._held
         for item in f.take():
             if len(held) < _MAX_HELD:

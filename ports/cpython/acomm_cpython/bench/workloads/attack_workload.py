@@ -312,7 +312,7 @@ class Attack(Forger):
         st = rt.finder.stats
         t = rt.table.routes
         return (dict((d, tuple(t[d][:6])) for d in t), st["rebroadcasts"], st["replies"], st["errors"],
-                rt.flooder.stats["delivered"], self.handed[me])
+                rt.flooder.stats["delivered"] if rt.flooder is not None else 0, self.handed[me])
 
     def _route_outcome(self, rtry, before, after, known, again):
         # a forged or replayed route control frame taken by a node: it succeeds when the node's
