@@ -6,7 +6,8 @@
 #
 # Scenarios (nodes RANGE_M apart at most to hear each other):
 #   chain      6 nodes in a line, 5 hops end to end; flows both ways
-#   grid       8 x 8, each node hearing only its 4 neighbours; random pairs
+#   grid       8 x 8 (or `nodes` rounded down to a square), each node hearing
+#              only its 4 neighbours; random pairs (a pair per 8 nodes)
 #   random     64 nodes at random in a square of constant density (about 5
 #              neighbours each; a draw that leaves a node cut off is drawn
 #              again), plus two AUVs crossing it; random pairs, and the AUVs
@@ -145,9 +146,11 @@ class RoutedNet:
         places = [(SPACING_M * i, 0.0) for i in range(6)]
         return places, [(0, 5), (5, 0)], 60000
 
-    def _grid(self, _):
-        places = [(SPACING_M * (i % 8), SPACING_M * (i // 8)) for i in range(64)]
-        return places, self._pairs(64, 8), 120000
+    def _grid(self, n):
+        side = int(math.sqrt(n or 64))
+        n = side * side
+        places = [(SPACING_M * (i % side), SPACING_M * (i // side)) for i in range(n)]
+        return places, self._pairs(n, max(2, n // 8)), 120000
 
     def _scatter(self, n):
         # uniform in a square of constant density, drawn again until every node can reach every

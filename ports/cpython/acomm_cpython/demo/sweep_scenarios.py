@@ -13,20 +13,33 @@
 #         frame to its grid neighbour `rate` times a minute, under `mac`
 #         (aloha: backoff up to 8 airtimes; tdma: one slot per node; none),
 #         with a loss curve that grows with range (2 % at 0 m, 10 % at
-#         500 m, certain at 1000 m) and a fixed `loss` on top
+#         500 m, certain at 1000 m) and a fixed `loss` on top; with
+#         `routing` learned, flooding or oracle instead of none, the routed
+#         grid of `acomm bench routing` (acomm_sim.routednet: `nodes`
+#         rounded down to a square, 150 m apart, heard only within 200 m,
+#         numbered packets between random pairs across it, routed that way;
+#         range, mac, rate, modem and loss are then its own)
+#   chain, random  acomm_sim.routednet's chain (6 nodes, 5 hops) and random
+#         scenario (64 nodes at random and two AUVs crossing), `routing`
+#         learned, flooding or oracle
 #
 # Measures (traffic the applications sent, as acomm_sim.metrics.PacketLog
 # counts it): pdr, latency quantiles (p50, p90, p99, s), jitter (seed
 # 004's mean |L_k - L_(k-1)|, s), collisions (copies lost to overlapping
-# arrivals), goodput (application bytes delivered per simulated second).
+# arrivals), goodput (application bytes delivered per simulated second),
+# overhead (routed scenarios: route control bytes on the air over payload
+# bytes delivered; empty for the others).
 
 SCENARIOS = {
     "demo": {"loss": 0.0, "mac": "tdma"},
-    "grid": {"nodes": 16, "range": 300.0, "loss": 0.0, "mac": "aloha", "rate": 1.0, "modem": "bpsk"},
+    "grid": {"nodes": 16, "range": 300.0, "loss": 0.0, "mac": "aloha", "rate": 1.0, "modem": "bpsk",
+             "routing": "none"},
+    "chain": {"routing": "learned"},
+    "random": {"routing": "learned"},
 }
 
 MEASURES = ("sent", "received", "pdr", "latency_p50_s", "latency_p90_s", "latency_p99_s", "jitter_s",
-            "collisions", "goodput_Bps")
+            "collisions", "goodput_Bps", "overhead")
 
 GRID_LOSS_CURVE = ((0.0, 0.02), (500.0, 0.1), (1000.0, 1.0))
 GRID_PAYLOAD = 20
@@ -48,8 +61,10 @@ def run(scenario, params, seed, minutes):
     p.update(params)
     if scenario == "demo":
         return _demo(p, seed, minutes)
-    if scenario == "grid":
+    if scenario == "grid" and p["routing"] == "none":
         return _grid(p, seed, minutes)
+    if scenario in ("grid", "chain", "random"):
+        return _routed(scenario, p, seed, minutes)
     raise ValueError("unknown scenario %r" % (scenario,))
 
 
@@ -80,7 +95,41 @@ def measures(log, collisions, sim_s):
         "jitter_s": s(sum(steps) / len(steps)) if steps else None,
         "collisions": collisions,
         "goodput_Bps": round(sum(r[5] for r in rows if r[7] is not None) / sim_s, 4) if sim_s else None,
+        "overhead": None,
     }
+
+
+# -- routed networks (chain, random, grid with routing) -------------------------------
+
+def _routed(scenario, p, seed, minutes):
+    from acomm_sim.routednet import MODES, RoutedNet
+
+    mode = p["routing"]
+    if mode not in MODES:
+        raise ValueError("%s: routing is %s, not %r" % (scenario, ", ".join(MODES + (("none",) if scenario == "grid"
+                                                                                       else ())), mode))
+    nodes = None
+    if scenario == "grid":
+        nodes = int(p["nodes"])
+        if not 4 <= nodes <= 254:
+            raise ValueError("grid: nodes is 4..254 with routing")
+    net = RoutedNet(scenario, mode, seed, nodes=nodes)
+    # the bench's drain, within the minutes asked for: a fifth of them with no new packet
+    m = net.run(minutes * 0.8, minutes * 0.2)
+    lat = sorted(net.got.values())
+    steps = [abs(lat[i] - lat[i - 1]) for i in range(1, len(lat))]
+
+    def q(x):
+        v = _quantile(lat, x)
+        return None if v is None else round(v / 1000, 4)
+
+    sim_s = net.w.now() / 1000
+    return {"sent": m["sent"], "received": m["delivered"], "pdr": round(m["pdr"], 6) if m["sent"] else None,
+            "latency_p50_s": q(0.5), "latency_p90_s": q(0.9), "latency_p99_s": q(0.99),
+            "jitter_s": round(sum(steps) / len(steps) / 1000, 4) if steps else None,
+            "collisions": net.ch.collided,
+            "goodput_Bps": round(net.delivered_bytes / sim_s, 4) if sim_s else None,
+            "overhead": round(m["overhead_ratio"], 4) if m["overhead_ratio"] is not None else None}
 
 
 # -- demo ---------------------------------------------------------------------------
