@@ -1,6 +1,7 @@
 # The neighbours of one link and how good each link to them is: the first
-# part of routing (issue 36). Not yet fed by acomm.link.Link: wiring it in
-# costs the buoy's heap, which is the routing issue's own budget to measure.
+# part of routing (issue 36, docs/routing.md). A transport that learns
+# routes gives each routing link one (Link.neighbours); the link feeds it
+# the adverts and frames it hears, the transport its polls' outcomes.
 #
 # The figure is ETX, the expected number of transmissions for one frame to
 # get through and be acknowledged (De Couto et al.; the metric UnetStack's

@@ -1,7 +1,7 @@
 # Network-wide flooding without I/O (issue 36, part 3): a node's side of
 # sending a short message to every node ("all divers surface", a rendezvous
 # schedule) over acomm.transport.routewire's flood message, a CONTROL frame.
-# Not yet run by the node: the transport wires it in later.
+# acomm.transport.routing runs it on a node (Transport.flood, docs/routing.md).
 #
 #   send(now, data, hops_limit=None) -> id   originate a flood
 #   heard(now, link, hop, payload)   a CONTROL frame's payload from neighbour hop

@@ -1,8 +1,7 @@
 # Route discovery without I/O (issue 36, third part): a node's side of
 # AODV-style searches (RFC 3561) over acomm.transport.routewire's messages,
-# into its acomm.transport.routetable.RouteTable. Not yet run by the node:
-# the transport still takes the static routes; wiring it in, with the
-# buoy's heap measured, is the next step.
+# into its acomm.transport.routetable.RouteTable. acomm.transport.routing
+# runs it on a node (docs/routing.md).
 #
 #   find(now, dest)        start a search (a flooded request); retried
 #                          `tries` times, search_ms apart, then given up

@@ -1,9 +1,8 @@
 # Learned routes, the second part of routing (issue 36): what a node knows
 # of the way to each destination it has heard of, by the rules AODV gives
-# for loop freedom (RFC 3561, section 6.2), in a bounded table. Not yet
-# consulted by acomm.transport.route.Router, whose static routes will keep
-# winning over these once it is; discovery (requests, replies, errors on the
-# water) is the next step.
+# for loop freedom (RFC 3561, section 6.2), in a bounded table, which
+# acomm.transport.route.Router consults after the static routes (those
+# still win) and acomm.transport.routefinder fills.
 #
 # A route: destination -> (next hop, link, cost, destination sequence
 # number, expiry). An offer replaces what is there when

@@ -9,9 +9,9 @@
 #   grid       8 x 8 (or `nodes` rounded down to a square), each node hearing
 #              only its 4 neighbours; random pairs (a pair per 8 nodes)
 #   random     64 nodes at random in a square of constant density (about 5
-#              neighbours each; a draw that leaves a node cut off is drawn
-#              again), plus two AUVs crossing it; random pairs, and the AUVs
-#              to and from n1
+#              neighbours each), plus two AUVs crossing it; random pairs
+#              within the largest part that can reach itself, and the AUVs
+#              to and from a node of it
 #   partition  two ends joined by a relay (2 hops) and a longer way round
 #              (3 hops); the relay dies at minute 10 and comes back at 20
 #   large      `nodes` (default 250) at random, at the random scenario's
@@ -150,34 +150,33 @@ class RoutedNet:
         side = int(math.sqrt(n or 64))
         n = side * side
         places = [(SPACING_M * (i % side), SPACING_M * (i // side)) for i in range(n)]
-        return places, self._pairs(n, max(2, n // 8)), 120000
+        return places, self._pairs(list(range(n)), max(2, n // 8)), 120000
 
     def _scatter(self, n):
-        # uniform in a square of constant density, drawn again until every node can reach every
-        # other (a partitioned draw would measure the geometry, not the routing)
+        # uniform in a square of constant density; -> (places, side, the largest set of nodes that
+        # can all reach each other: the flows stay within it, since a pair cut off by the geometry
+        # would measure the geometry, not the routing)
         side = math.sqrt(n * DENSITY_M2)
-        for _ in range(100):
-            places = [(self.rng.below(int(side)) * 1.0, self.rng.below(int(side)) * 1.0) for _ in range(n)]
-            if _connected(places):
-                return places, side
-        raise ValueError("no connected placement of %d nodes in 100 draws" % n)
+        places = [(self.rng.below(int(side)) * 1.0, self.rng.below(int(side)) * 1.0) for _ in range(n)]
+        return places, side, _largest_component(places)
 
     def _random(self, _):
-        places, side = self._scatter(64)
+        places, side, reach = self._scatter(64)
         # two AUVs (ids 65, 66) crossing the square at 1.5 m/s, corner to corner and back
         self.tracks[64] = Track((0.0, 0.0, 10.0), t0=_EPOCH_MS, waypoints=[(side, side, 10.0), (0.0, 0.0, 10.0)] * 3,
                                 speed=1.5)
         self.tracks[65] = Track((side, 0.0, 10.0), t0=_EPOCH_MS, waypoints=[(0.0, side, 10.0), (side, 0.0, 10.0)] * 3,
                                 speed=1.5)
         places += [(0.0, 0.0), (side, 0.0)]
-        return places, self._pairs(64, 8) + [(64, 0), (0, 65)], 120000
+        hub = reach[0]  # the AUVs talk to a node of the connected part
+        return places, self._pairs(reach, 8) + [(64, hub), (hub, 65)], 120000
 
     def _large(self, n):
         n = n or 250
         if not 16 <= n <= 254:
             raise ValueError("large: 16..254 nodes (node ids are one byte on the water)")
-        places, _ = self._scatter(n)
-        return places, self._pairs(n, 16), 180000
+        places, _, reach = self._scatter(n)
+        return places, self._pairs(reach, 16), 180000
 
     def _partition(self, _):
         # n1 (0,0) - n2 relay (150,0) - n3 (300,0); round: n1 - n4 (100,150) - n5 (200,150) - n3
@@ -194,10 +193,11 @@ class RoutedNet:
         self.w.add_task(_Script([(self.w.now() + 600000, die), (self.w.now() + 1200000, back)]))
         return places, [(0, 2), (2, 0)], 60000
 
-    def _pairs(self, n, k):
+    def _pairs(self, nodes, k):
+        # k distinct (source, destination) pairs among the node indices given
         out = []
         while len(out) < k:
-            a, b = self.rng.below(n), self.rng.below(n)
+            a, b = nodes[self.rng.below(len(nodes))], nodes[self.rng.below(len(nodes))]
             if a != b and (a, b) not in out:
                 out.append((a, b))
         return out
@@ -349,16 +349,24 @@ class RoutedNet:
         return out
 
 
-def _connected(places):
-    seen = {0}
-    todo = [0]
-    while todo:
-        a = todo.pop()
-        for b in range(len(places)):
-            if b not in seen and math.hypot(places[a][0] - places[b][0], places[a][1] - places[b][1]) <= RANGE_M:
-                seen.add(b)
-                todo.append(b)
-    return len(seen) == len(places)
+def _largest_component(places):
+    # the node indices of the largest set that can all reach each other within RANGE_M, sorted
+    left = set(range(len(places)))
+    best = []
+    while left:
+        start = min(left)
+        seen = {start}
+        todo = [start]
+        while todo:
+            a = todo.pop()
+            for b in list(left):
+                if b not in seen and math.hypot(places[a][0] - places[b][0], places[a][1] - places[b][1]) <= RANGE_M:
+                    seen.add(b)
+                    todo.append(b)
+        left -= seen
+        if len(seen) > len(best):
+            best = sorted(seen)
+    return best
 
 
 def _dist(a, b):
