@@ -89,3 +89,12 @@ class TempDir:
 
     def file(self, name="s"):
         return self.path + "/" + name
+
+
+def adjacency(edges):
+    """{node: set of neighbours} of an undirected graph given as (a, b) edges."""
+    adj = {}
+    for a, b in edges:
+        adj.setdefault(a, set()).add(b)
+        adj.setdefault(b, set()).add(a)
+    return adj

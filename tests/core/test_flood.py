@@ -9,7 +9,7 @@ from acomm.errors import AcommError, EncodeError
 from acomm.prng import Prng
 from acomm.transport import routewire as W
 from acomm.transport.flood import BROADCAST, MAX_DATA, Flooder
-from checks import raises
+from checks import adjacency, raises
 
 T0 = TICKS_MAX - 3000  # every network run crosses the wrap
 
@@ -18,10 +18,7 @@ class Net:
     # Each node's broadcasts reach exactly its neighbours, step ms after
     # poll() hands them out (no losses, no collisions: the rules, not the channel).
     def __init__(self, edges, seed=1, **kw):
-        self.adj = {}
-        for a, b in edges:
-            self.adj.setdefault(a, set()).add(b)
-            self.adj.setdefault(b, set()).add(a)
+        self.adj = adjacency(edges)
         self.now = T0
         self.f = {}
         for n in sorted(self.adj):

@@ -8,6 +8,7 @@ from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.prng import Prng
 from acomm.transport.routefinder import BROADCAST, RouteFinder
 from acomm.transport.routetable import RouteTable
+from checks import adjacency
 
 T0 = TICKS_MAX - 20000
 HOP = 16  # every hop ETX 1
@@ -15,10 +16,7 @@ HOP = 16  # every hop ETX 1
 
 class Net:
     def __init__(self, edges, jitter_ms=500, seed=1):
-        self.adj = {}
-        for a, b in edges:
-            self.adj.setdefault(a, set()).add(b)
-            self.adj.setdefault(b, set()).add(a)
+        self.adj = adjacency(edges)
         self.now = T0
         self.f = {}
         for n in self.adj:
