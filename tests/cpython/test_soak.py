@@ -1,5 +1,5 @@
-# A short soak (acomm_cpython.bench.workloads.soak_workload): the demo network
-# for 1.5 simulated hours with every fault kind at 12 times the 24-hour
+# A short soak (acomm_cpython.bench.workloads.soak_workload): the demo network,
+# routing on, for 1.5 simulated hours with every fault kind at 12 times the 24-hour
 # run's rate, then drained. Every accepted packet must end delivered or
 # reported expired/failed, none delivered twice or damaged, no exception
 # may escape a node's step, and every fault kind must really have happened.
@@ -15,6 +15,7 @@ def test_short_soak_loses_nothing_and_every_fault_happened():
     assert f["packets_corrupt"] == 0 and f["extra_final_statuses"] == 0, f
     assert f["task_deaths"] == 0, s.deaths
     assert f["packets_pending_at_end"] == 0
+    assert f["packets_relayed"] > 0 and f["route_requests"] > 0  # routed: some went through a relay
     for kind in RATES:
         assert f["faults_" + kind] > 0, kind
     assert f["packets_refused_store_full"] > 0 and f["stores_filled"] > 0

@@ -15,8 +15,12 @@
 #                  one; the AUV's store is small (3 KiB) all the time
 #   clock_jump     the node's wall clock jumps -30..+30 min; ticks run on
 #
+# Every node learns its routes (routing on, docs/routing.md): route requests,
+# replies and errors go through the same faults as the packets.
+#
 # Then the traffic stops and the run goes on until every packet has a final
-# status (at most until the longest lifespan and clock jump have passed).
+# status and no relay holds one in custody (at most until the longest
+# lifespan and clock jump have passed).
 # Figures (acomm_sim.ledger says how packets are counted):
 #   packets_accepted       send() took it (queued)
 #   packets_lost           accepted, not delivered, not reported expired or
@@ -83,8 +87,9 @@ def payload(seq, n):
 
 
 class Soak:
-    def __init__(self, seed=1, hours=24.0, rate_scale=1.0, traffic_scale=1.0, tmpdir=None):
+    def __init__(self, seed=1, hours=24.0, rate_scale=1.0, traffic_scale=1.0, tmpdir=None, routing=True):
         self.seed = seed
+        self.routing = {"seed": seed} if routing else None
         self.duration_ms = int(hours * 3600000)
         self.dir = tmpdir or tempfile.mkdtemp(prefix="acomm-soak-")
         self._own_dir = tmpdir is None
@@ -128,7 +133,9 @@ class Soak:
         # tests' business), and 24 h of fsyncs would cost minutes
         store = Store(os.path.join(self.dir, name + ".store"), capacity_bytes=STORE_BYTES[name], max_record=256,
                       sync=False)
-        Transport.of(node, store=store, wall=self.walls[name])
+        # learned routes (docs/routing.md): the nodes find their ways themselves, and a rebuilt
+        # node starts with an empty route table, as a board's boot would
+        Transport.of(node, store=store, wall=self.walls[name], routing=self.routing)
         return node
 
     def _stepper(self, name):
@@ -240,9 +247,15 @@ class Soak:
         for c in self.cables.values():
             c.plug()  # a cable the plan would plug back after the end
         led = self.ledger
+
+        def busy():
+            # a packet without its final status at its origin, or one a relay holds in custody
+            # (its origin was told `transmitted`: the relay delivers it or lets it expire)
+            return led.pending() or any(p.relayed for sn in self.sn.values() for p in sn.node.transport._out)
+
         limit = w.now() + drain_ms
-        while led.pending() and w.now() < limit:
-            w.run(min(chunk_ms, limit - w.now()), until=lambda: not led.pending())
+        while busy() and w.now() < limit:
+            w.run(min(chunk_ms, limit - w.now()), until=lambda: not busy())
         return self
 
     def figures(self):
@@ -258,6 +271,10 @@ class Soak:
             "packets_corrupt": c["corrupt"],
             "extra_final_statuses": c["extra_final"],
             "packets_pending_at_end": self.ledger.pending(),
+            # since each node's last boot (a power loss starts its counters again)
+            "packets_relayed": sum(sn.node.transport.stats["relayed"] for sn in self.sn.values()),
+            "route_requests": sum(sn.node.transport.router.routing.finder.stats["requests"]
+                                  for sn in self.sn.values() if sn.node.transport.router.routing is not None),
             "task_deaths": sum(self.deaths.values()),
             "stores_filled": self.stores_full,
             "simulated_s": self.w.now() // 1000,
@@ -274,12 +291,12 @@ class Soak:
             shutil.rmtree(self.dir, ignore_errors=True)
 
 
-def soak(seed=1, hours=24.0, rate_scale=1.0, traffic_scale=1.0, trace=True):
+def soak(seed=1, hours=24.0, rate_scale=1.0, traffic_scale=1.0, trace=True, routing=True):
     # -> (figures, wall seconds)
     if trace:
         tracemalloc.start()
     t0 = time.perf_counter()
-    s = Soak(seed, hours, rate_scale, traffic_scale)
+    s = Soak(seed, hours, rate_scale, traffic_scale, routing=routing)
     try:
         s.run()
         f = s.figures()
