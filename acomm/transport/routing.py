@@ -31,6 +31,7 @@ from .routetable import RouteTable
 _CONTROL = const(4)  # acomm.frame.CONTROL
 _AVAILABLE = const(1)
 _UNAVAILABLE = const(2)
+_EV_AVAILABILITY = const(22)
 _TRANSMITTED = const(4)
 _FAILED = const(8)
 _REPLY_KIND = const(2)  # acomm.transport.routewire.REPLY
@@ -129,10 +130,18 @@ class Routing:
         trying), routes through it turn invalid and an error goes out. -> True when they did."""
         if not self.routes_on(link):
             return False
-        heard = link.discovery.last_heard(hop)
-        if heard is not None and ticks_diff(now, heard) < window_ms + link.discovery.period_ms:
+        d = link.discovery
+        heard = d.last_heard(hop)
+        if heard is not None and ticks_diff(now, heard) < window_ms + d.period_ms:
             return False
         self.finder.hop_failed(now, hop, link.name)
+        # and discovery learns it now, not after its missed adverts: a destination it still calls
+        # heard would keep being tried directly instead of searched for. Done here, on the table
+        # the console reads, so that a board that does not route pays no method for it
+        e = d.nodes.get(hop)
+        if e is not None and e[2] == _AVAILABLE:
+            e[2] = _UNAVAILABLE
+            link._emit((_EV_AVAILABILITY, link, self.names.name_of(hop), _UNAVAILABLE))
         return True
 
     # -- control frames ----------------------------------------------------------------------

@@ -13,6 +13,9 @@ from ..demo.mission import Mission
 
 
 def add_arguments(p):
+    p.add_argument("--mission", choices=("caddy", "relay"), default="caddy",
+                   help="caddy: the diver, the buoy and the AUV at work (default); relay: the diver swims out of "
+                        "the buoy's range and reports through the AUV, on routes the nodes find (docs/routing.md)")
     p.add_argument("--seed", type=int, default=1, help="the run is the same for the same seed")
     p.add_argument("--minutes", type=float, default=20, help="simulated minutes (the plan fills 20)")
     p.add_argument("--out", default="demo-out", help="folder for packets.csv and the plots")
@@ -36,6 +39,18 @@ def main(args):
         print("acomm demo: --speed must be positive")
         return 2
     say = None if args.json else print
+    if args.mission == "relay":
+        if args.web is not None:
+            print("acomm demo: --web goes with the caddy mission")
+            return 2
+        from ..demo import relay
+
+        if say:
+            print("acomm demo: relay mission: the diver reports to the buoy through the AUV, on routes nobody typed")
+            print("            real acomm nodes and SeaTrac drivers against emulated beacons; seed %d, %g minutes"
+                  % (args.seed, args.minutes))
+            print()
+        return relay.main(args, say)
     if args.web is not None and say is not None:
         say = _flushed  # a browser test reads the timeline through a pipe
     if say:
