@@ -17,6 +17,10 @@
 #   events: ("found", dest, cost) and ("unreachable", dest) in take_events()
 #   searching(dest)        whether a search for dest runs (not after it gave up)
 #
+# With ring > 0 a search's first request goes no further than `ring` relays
+# (its hop count starts at MAX_HOPS - ring); the next tries flood the whole
+# network. tries counts the ring.
+#
 # A search given up is held off for hold_ms: find() does nothing for that
 # destination until then, so a node that keeps asking for an unreachable
 # one floods a request per hold_ms, not one per call.
@@ -47,7 +51,7 @@ BROADCAST = const(255)
 
 class RouteFinder:
     def __init__(self, node_id, table, hop_cost, links=("acoustic",), tries=3, search_ms=60000,
-                 lifetime_ms=600000, jitter_ms=2000, unknown_cost=32, seen_cap=32, seed=1, hold_ms=0):
+                 lifetime_ms=600000, jitter_ms=2000, unknown_cost=32, seen_cap=32, seed=1, hold_ms=0, ring=0):
         self.node_id = node_id
         self.table = table
         self.hop_cost = hop_cost
@@ -59,6 +63,7 @@ class RouteFinder:
         self.unknown_cost = unknown_cost
         self.seen_cap = seen_cap
         self.hold_ms = hold_ms
+        self.ring = ring
         self.seq = 0  # this node's own destination sequence number
         self._rid = 0
         self._rng = Prng(seed)
@@ -84,11 +89,13 @@ class RouteFinder:
         s = self._searches.get(dest)
         return s is not None and s[0] >= 0
 
-    def _request(self, now, dest):
+    def _request(self, now, dest, ttl=0):
         self._rid = (self._rid + 1) % 256
         self.seq = (self.seq + 1) % SEQ_MOD
         known = self.table.seq(dest)
-        payload = W.encode_request(self._rid, self.node_id, self.seq, dest, known if known >= 0 else W.UNKNOWN_SEQ, 0, 0)
+        # a ring of ttl relays: the count starts that far below MAX_HOPS, where relays stop
+        payload = W.encode_request(self._rid, self.node_id, self.seq, dest, known if known >= 0 else W.UNKNOWN_SEQ,
+                                   W.MAX_HOPS - ttl if ttl else 0, 0)
         self._remember((self.node_id, self._rid))
         for link in self.links:
             self._out.append((now, link, BROADCAST, payload))
@@ -111,9 +118,13 @@ class RouteFinder:
                 else:
                     del self._searches[dest]
                 continue
+            # the first try of a search asks only within `ring` relays (AODV's expanding ring):
+            # a route that broke, or a node that moved, is mostly still near, and a ring costs the
+            # nodes around, not the whole network; it waits a tenth of search_ms per relay
+            ttl = self.ring if s[0] == self.tries else 0
             s[0] -= 1
-            s[1] = ticks_add(now, self.search_ms)
-            self._request(now, dest)
+            s[1] = ticks_add(now, self.search_ms * ttl // 10 if ttl else self.search_ms)
+            self._request(now, dest, ttl)
 
     # -- hearing ---------------------------------------------------------------------------------
     def heard(self, now, link, hop, payload):

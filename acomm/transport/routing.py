@@ -44,7 +44,7 @@ _MAX_HELD = const(16)  # rebroadcasts waiting for their jitter; more are dropped
 
 class Routing:
     def __init__(self, node_id, names, links, next_id, media=("acoustic",), capacity=32, tries=3,
-                 search_ms=60000, hold_ms=60000, lifetime_ms=600000, jitter_ms=None, seed=None):
+                 search_ms=60000, hold_ms=60000, lifetime_ms=600000, jitter_ms=None, seed=None, ring=3):
         """links: name -> Link (the node's, read live); next_id(): a fresh link request id."""
         self.names = names
         self.node_links = links
@@ -52,7 +52,7 @@ class Routing:
         self.media = tuple(media)
         self.table = RouteTable(capacity)
         self.finder = RouteFinder(node_id, self.table, self.hop_cost, links=(), tries=tries, search_ms=search_ms,
-                                  lifetime_ms=lifetime_ms, jitter_ms=jitter_ms or 0, hold_ms=hold_ms,
+                                  lifetime_ms=lifetime_ms, jitter_ms=jitter_ms or 0, hold_ms=hold_ms, ring=ring,
                                   seed=node_id + 1 if seed is None else seed)
         self.flooder = None  # acomm.transport.flood.Flooder, made by the first flood sent or heard
         self._seed = node_id + 7 if seed is None else seed + 6

@@ -173,3 +173,19 @@ def test_a_flood_payload_is_not_taken_for_route_control():
     f = RouteFinder(5, t, lambda now, link, hop: 16)
     f.heard(0, "acoustic", 2, W.encode_flood(9, 1, 0, b"all up"))
     assert f.stats["bad"] == 1 and not f.take() and not t.routes
+
+
+def test_a_ring_search_asks_the_near_nodes_first_then_the_whole_network():
+    # a chain 1-2-...-8; ring 2: the first request stops 3 nodes out (it starts at MAX_HOPS - 2)
+    net = Net([(i, i + 1) for i in range(1, 8)])
+    for f in net.f.values():
+        f.ring = 2
+    f1 = net.f[1]
+    f1.find(net.now, 8)
+    net.run(3500)  # the ring's wait is 2/10 of search_ms (20 s): 4 s
+    assert f1.stats["requests"] == 1 and not [e for e in f1.take_events() if e[0] == "found"]
+    reached = [n for n in net.f if n != 1 and net.f[n].stats["rebroadcasts"]]
+    assert reached == [2, 3], reached  # 2 and 3 passed it on; 4 heard it at MAX_HOPS and stopped
+    assert net.f[4].table.lookup(net.now, 1) is not None and net.f[5].table.lookup(net.now, 1) is None
+    net.run(20000)  # the next try floods the chain
+    assert f1.table.lookup(net.now, 8) is not None and f1.stats["requests"] == 2

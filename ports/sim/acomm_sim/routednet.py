@@ -169,14 +169,15 @@ class RoutedNet:
                                 speed=1.5)
         places += [(0.0, 0.0), (side, 0.0)]
         hub = reach[0]  # the AUVs talk to a node of the connected part
-        return places, self._pairs(reach, 8) + [(64, hub), (hub, 65)], 120000
+        # a packet per flow every 4 minutes: at 2 minutes even the oracle lost half of them to collisions
+        return places, self._pairs(reach, 8) + [(64, hub), (hub, 65)], 240000
 
     def _large(self, n):
         n = n or 250
         if not 16 <= n <= 254:
             raise ValueError("large: 16..254 nodes (node ids are one byte on the water)")
         places, _, reach = self._scatter(n)
-        return places, self._pairs(reach, 16), 180000
+        return places, self._pairs(reach, 16), 360000
 
     def _partition(self, _):
         # n1 (0,0) - n2 relay (150,0) - n3 (300,0); round: n1 - n4 (100,150) - n5 (200,150) - n3

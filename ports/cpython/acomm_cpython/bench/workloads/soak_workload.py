@@ -104,6 +104,7 @@ class Soak:
         self.ends = {}
         self.sn = {}
         self.rebuilt = 0
+        self._counted = {"relayed": 0, "route_requests": 0}  # the counters of transports a power loss dropped
         for name in NAMES:
             ends = w.modem_ends("seatrac", ADDR[name], {"part": 843 if name == DIVER else 795,
                                                       "seed": seed * 10 + ADDR[name]}, START[name])
@@ -167,6 +168,9 @@ class Soak:
     def _power_loss(self, name, now):
         sn = self.sn[name]
         old = sn.node.transport
+        self._counted["relayed"] += old.stats["relayed"]
+        if old.router.routing is not None:
+            self._counted["route_requests"] += old.router.routing.finder.stats["requests"]
         old.store.close()  # what was flushed stays in the file; the rest is gone
         sn.host_end.read()  # and so is what waited in the UART
         self.ends[name][0].reboot(now)  # the beacon is on the same supply
@@ -271,10 +275,12 @@ class Soak:
             "packets_corrupt": c["corrupt"],
             "extra_final_statuses": c["extra_final"],
             "packets_pending_at_end": self.ledger.pending(),
-            # since each node's last boot (a power loss starts its counters again)
-            "packets_relayed": sum(sn.node.transport.stats["relayed"] for sn in self.sn.values()),
-            "route_requests": sum(sn.node.transport.router.routing.finder.stats["requests"]
-                                  for sn in self.sn.values() if sn.node.transport.router.routing is not None),
+            # the live transports' counters, and those of the ones power losses dropped
+            "packets_relayed": self._counted["relayed"] + sum(sn.node.transport.stats["relayed"]
+                                                              for sn in self.sn.values()),
+            "route_requests": self._counted["route_requests"] + sum(
+                sn.node.transport.router.routing.finder.stats["requests"]
+                for sn in self.sn.values() if sn.node.transport.router.routing is not None),
             "task_deaths": sum(self.deaths.values()),
             "stores_filled": self.stores_full,
             "simulated_s": self.w.now() // 1000,
