@@ -19,10 +19,10 @@
 #   routing       absent or False: static routes only, and the routing
 #                 modules are never loaded; True, or a dict of
 #                 acomm.transport.routing.Routing's options (media, capacity,
-#                 tries, search_ms, hold_ms, lifetime_ms, jitter_ms, seed):
-#                 routes are learned on the acoustic links (route requests,
-#                 replies, errors; static routes still win), for about
-#                 2 KB more heap on the buoy (BENCHMARKS.md, routing figures)
+#                 tries, search_ms, hold_ms, lifetime_ms, jitter_ms, seed,
+#                 ring): routes are learned on the acoustic links (route
+#                 requests, replies, errors; static routes still win), for
+#                 about 3.5 KB more heap on the buoy (docs/routing.md)
 #   storage       {"path", "capacity", "max_record"} of the packet store on
 #                 flash, or None to keep packets in RAM only
 #   max_packet    the transport's largest packet, bytes
