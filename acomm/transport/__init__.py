@@ -780,8 +780,9 @@ class Transport:
         if self._quiet and not tries:
             return
         rid = self._next_id()
-        # known before the request: its `queued` (or a refusal, not tried again) comes from inside request()
-        self._sacks[rid] = (link, src, seg, 2)
+        # known before the request: its `queued` (or a refusal, not tried again: tries 2) comes from
+        # inside request(); a constant tuple, so a SACK allocates nothing more for it
+        self._sacks[rid] = (None, None, None, 2)
         if link.request(now, rid, self.names.name_of(src), seg[1], _SACK_LIFESPAN_S, _SACK_PRIORITY, ftype=_SEGMENT,
                         seq=seg[0]):
             self._sacks[rid] = (link, src, seg, tries)

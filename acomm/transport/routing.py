@@ -59,7 +59,9 @@ class Routing:
         self._nlinks = -1
         self._auto_jitter = jitter_ms is None
         self._held = []  # (not before, link name, to, payload)
-        self._rids = {}  # link request id -> (link name, hop id or None): the control frames' statuses
+        # link request id -> None (a broadcast) or (link name, hop id, payload, sent again): the
+        # control frames whose statuses stop here
+        self._rids = {}
         self.stats = {"control_sent": 0, "control_bytes": 0, "control_dropped": 0, "replies_rerouted": 0}
 
     # -- links and costs ------------------------------------------------------------------
@@ -82,7 +84,7 @@ class Routing:
         if link is None:
             return None
         e = self.neighbours(link).etx16(now, hop)
-        c = link.caps
+        c = link.driver.caps  # the driver's own: Link.caps copies them, and this runs per packet and poll
         ms = c.latency_ms + (512000 // c.bitrate if c.bitrate else 60000)  # 64 bytes
         return (_UNKNOWN_ETX16 if e is None else e) * (1 + ms // 1000)
 
@@ -173,11 +175,11 @@ class Routing:
         if self._auto_jitter:
             # a rebroadcast waits 0..jitter: wide enough that the neighbours that heard one request
             # seldom start within one short frame of each other (they would collide at the next
-            # hop: acoustic modems rarely sense the carrier), 2 x (neighbours + 1) short frames
+            # hop: acoustic modems rarely sense the carrier), 2 x (neighbours + 2) short frames
             j = 0
             for n in self.finder.links:
                 link = links[n]
-                bps = link.caps.bitrate or 100
+                bps = link.driver.caps.bitrate or 100
                 nb = link.neighbours
                 k = 2 * (2 + (0 if nb is None else len(nb.table))) * (128000 // bps + 200)
                 if k > j:

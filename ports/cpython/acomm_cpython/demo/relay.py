@@ -55,6 +55,7 @@ class RelayMission:
         self.sent = {}  # seq -> time sent
         self.got = {}  # seq -> delay ms
         self._route = "none"
+        self._next = None  # the diver's next report (run() sets it)
         self.route_changes = []  # (time ms, "direct", "via auv" or "none")
 
     def _log(self, now, text):
@@ -88,7 +89,7 @@ class RelayMission:
                                 route, "diver -> buoy: route found %s (cost %d)" % (route, r[2] if r else 0)))
         return now + 1000
 
-    def _listener(self, now):
+    def _listener(self):
         def on_event(ev):
             if ev[0] == EV_PACKET and ev[1] == DIVER:
                 seq = int(ev[3][9:13])
@@ -100,7 +101,7 @@ class RelayMission:
     def run(self):
         """The whole plan -> self."""
         w = self.w
-        self.sn[BUOY].node.listen(self._listener(w.now()))
+        self.sn[BUOY].node.listen(self._listener())
         w.run(65000)  # the beacons hear each other's adverts
         self._next = w.now()
         w.add_task(self)
