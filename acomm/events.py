@@ -76,7 +76,7 @@ EV_RANGE_RECEIVED = const(24)
 # head: the frame header's sequence field (acomm.transport.segment)
 EV_SEGMENT = const(25)
 # (EV_CONTROL, link, src_id, payload, authed): a route control frame's
-# payload (acomm.transport.routewire), for the transport's routing
+# payload (acomm.transport.routing), for the transport's routing
 EV_CONTROL = const(29)
 # Transport -> application:
 #   (EV_PACKET_STATUS, pid, status, reason)   statuses as for requests

@@ -1,6 +1,6 @@
 # Network-wide flooding without I/O (issue 36, part 3): a node's side of
 # sending a short message to every node ("all divers surface", a rendezvous
-# schedule) over acomm.transport.routewire's flood message, a CONTROL frame.
+# schedule) over acomm.transport.routing's flood message, a CONTROL frame.
 # acomm.transport.routing runs it on a node (Transport.flood, docs/routing.md).
 #
 #   send(now, data, hops_limit=None) -> id   originate a flood
@@ -37,10 +37,10 @@
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError
 from ..prng import Prng
-from . import routewire as W
+from . import routing as W
 
 BROADCAST = const(255)
-MAX_DATA = W.MAX_FLOOD_DATA  # 18 bytes: see routewire
+MAX_DATA = W.MAX_FLOOD_DATA  # 18 bytes: see acomm.transport.routing
 
 
 class Flooder:
@@ -91,7 +91,7 @@ class Flooder:
 
     def heard(self, now, link, hop, payload):
         """A CONTROL payload from neighbour hop; True when it was a flood's (bad bytes counted, dropped)."""
-        if payload and payload[0] >> 6 != W.FLOOD:
+        if payload and payload[0] >> 6 != 0:  # not a flood (kind 0)
             return False  # route discovery's
         try:
             _, origin, mid, hops, data = W.decode(payload)

@@ -1,32 +1,127 @@
-# Learned routes on a running node (issue 36): joins the route table and the
-# route finder to the transport's links. Imported only when the transport is
-# made with routing=..., so a board that does not route pays nothing.
+# Learned routes on a running node (issue 36): route control on the water,
+# the route table and the searches (AODV-like, RFC 3561), joined to the
+# transport's links. Imported only when the transport is made with
+# routing=..., so a board that does not route pays nothing.
 #
-# Which links route: those whose medium is in `media` (acoustic by default):
-# they carry adverts, so a neighbour is known, and a route there is found
-# by a flooded request. Other links (satellite, a cable) keep the static
-# rule: the destination is the hop.
+# One module of over 400 lines, and one class, on purpose: a frozen module
+# still makes each of its functions, classes and instances in RAM at
+# import, and this was four modules of about 70 functions and three
+# objects, 3.3 KB of the buoy's heap (docs/routing.md, "Heap"). Its four
+# parts, in this order:
 #
-# The metric of a hop is its ETX x 16 (acomm.link.neighbours, one table per
-# routing link, fed by the link's adverts and heard frames and by the
-# transport's polls, answered or not) times the link's airtime factor: the
-# seconds a 64-byte frame takes there, latency included, at least 1. A
-# neighbour without a figure yet counts as ETX 2.
+# 1. On the water: the payload of a CONTROL frame (acomm.frame.CONTROL, a
+#    type nothing else uses), whose header already names the hop that sent
+#    it. Decoders raise only DecodeError; encoders check every range
+#    themselves (struct does not on MicroPython). docs/wire-format.md,
+#    "Route control", has the layout.
 #
-# A packet for a destination no route names waits while its search runs;
-# the finder gives up after its tries and then holds off (hold_ms) before
-# searching again, so an unreachable node costs a request per hold_ms, not
-# a flood per poll. Route control frames go out as the link's CONTROL
-# frames, sealed like every frame when the node has a key; their statuses
-# are the transport's, not the application's.
+#   byte 0: kind (top 2 bits: 0 flood, 1 request, 2 reply, 3 error) and a 6-bit
+#           count: the hops so far for a flood, a request or a reply, the
+#           destinations for an error
+#   request (flooded), 10 bytes:
+#     kind|hops  id  origin  origin_seq(2)  dest  dest_seq(2)  cost(2)
+#     id: the origin's request counter (a relay drops an (origin, id) it has
+#     seen); dest_seq UNKNOWN_SEQ when the origin knows none
+#   reply (unicast back along the reverse path), 8 bytes:
+#     kind|hops  dest  dest_seq(2)  origin  cost(2)  lifetime (4 s units, 1..255)
+#   error (to the sources that used the hop), 1 + 3 per destination (1..16):
+#     kind|n  (dest  dest_seq(2)) x n
+#   flood (acomm.transport.flood, rebroadcast by every node), 3 + 1..MAX_FLOOD_DATA bytes:
+#     kind|hops  origin  id  data
+#     id: the origin's flood counter mod 256; data is the application's
 #
-# Floods (acomm.transport.flood) go out on the same links, as the same
-# CONTROL frames: each node hands a new one up once and passes it on once.
+#    Sequence numbers and costs are big-endian 16-bit. A request for a
+#    destination whose sequence number the origin does not know carries
+#    UNKNOWN_SEQ (0xFFFF, which the table therefore never hands out: its
+#    numbers stay below it). Costs saturate at MAX_COST; 0xFFFF is never
+#    written, and a decoder refuses it.
+#
+# 2. The table: destination -> [next hop, link, cost, destination sequence
+#    number, expiry, valid, last used] by AODV's rules for loop freedom
+#    (RFC 3561, 6.2). acomm.transport.route.Router consults it after the
+#    static routes (those still win). An offer replaces what is there when
+#      - there is no route, or it expired or was invalidated, or
+#      - the offer's sequence number is newer (modulo 65,535, RFC 1982 style), or
+#      - it is as new and cheaper.
+#    An older sequence number never wins: that is what keeps routes free of
+#    loops when nodes learn from stale replies. A broken hop's routes turn
+#    invalid, kept with their sequence numbers raised by one (as RFC 3561
+#    does) so that only fresher news restores them, and a route error names
+#    them. Bounded: at most `capacity` destinations; a new one takes the
+#    place of an expired or invalid route first, else of the one used
+#    longest ago; refused (and counted) when every route is valid and used
+#    within a minute.
+#
+# 3. The searches. search(now, dest) floods a request, retried `tries`
+#    times, search_ms apart, then given up and held off for hold_ms (so a
+#    node that keeps asking for an unreachable one floods a request per
+#    hold_ms, not one per poll). With ring > 0 a search's first request
+#    goes no further than `ring` relays (its hop count starts at MAX_HOPS -
+#    ring); the next tries flood the whole network. tries counts the ring.
+#    Each node rebroadcasts an (origin, id) at most once (a bounded list of
+#    the last 32), after a random 0..jitter_ms so that the neighbours that
+#    heard the same request do not send into each other, adds the cost of
+#    the hop it came over, and learns the reverse route to the origin from
+#    every copy. Only the destination answers (no intermediate replies:
+#    simpler, and never an answer from a stale route); it raises its own
+#    sequence number to at least the one asked for. Replies go back hop by
+#    hop along the reverse routes, each hop learning the forward route.
+#    Errors: a node drops every route through the failed hop and broadcasts
+#    one error; a neighbour that routed those destinations through the
+#    sender drops them too and passes the error on, once (errors carry the
+#    raised sequence numbers, so a repeat changes nothing and stops there).
+#
+# 4. The links. Those whose medium (or name) is in `media` (acoustic by
+#    default) route: they carry adverts, so a neighbour is known, and a
+#    route there is found by a flooded request. Other links (satellite, a
+#    cable) keep the static rule: the destination is the hop. The metric of
+#    a hop is its ETX x 16 (acomm.link.neighbours, one table per routing
+#    link, fed by the link's adverts and heard frames and by the
+#    transport's polls, answered or not) times the link's airtime factor:
+#    the seconds a 64-byte frame takes there, latency included, at least 1.
+#    A neighbour without a figure yet counts as ETX 2. Route control goes
+#    out as the link's CONTROL frames, sealed like every frame when the
+#    node has a key; their statuses are the transport's, not the
+#    application's. Floods (acomm.transport.flood, made by the first flood
+#    sent or heard) go out on the same links, as the same CONTROL frames.
+#
+# Times are ticks (ms). `finder` and `table` name this object too: the
+# benches and the console read rt.finder.stats and rt.table.routes, from
+# when those were objects of their own.
 
-from ..compat import const, ticks_diff
-from ..errors import AcommError
-from .routefinder import BROADCAST, RouteFinder
-from .routetable import RouteTable
+from ..compat import const, ticks_add, ticks_diff
+from ..errors import AcommError, DecodeError, EncodeError
+from ..prng import Prng
+
+BROADCAST = const(255)  # acomm.link.BROADCAST's node id
+UNKNOWN_SEQ = const(0xFFFF)
+MAX_COST = const(0xFFFE)
+MAX_HOPS = const(63)
+MAX_ERRORS = const(16)
+LIFETIME_UNIT_MS = const(4000)
+# A flood's data fits a sealed elided frame on a 30-byte SeaTrac packet, the
+# smallest acoustic MTU acomm drives: 30 - 2 (link byte, flags byte) - 7
+# (counter and 4-byte tag) - 3 (its header) = 18 bytes.
+MAX_FLOOD_DATA = const(18)
+# the kinds on the water; private, so that they cost no slot in the module's dict
+_FLOOD = const(0)
+_REQUEST = const(1)
+_REPLY = const(2)
+_ERROR = const(3)
+
+# numbers 0..65534: 0xFFFF is "unknown" on the water
+_SEQ_MOD = const(65535)
+_HALF = const(32767)
+# a route's fields
+_NEXT = const(0)  # next hop's node id
+_LINK = const(1)  # the link's name
+_COST = const(2)
+_SEQ = const(3)  # destination sequence number, or -1 unknown
+_EXPIRES = const(4)  # ticks
+_VALID = const(5)
+_USED = const(6)  # ticks last looked up or refreshed
+_DEAD = const(1 << 29)  # an eviction score above every live route's
+_KEEP_MS = const(60000)  # a live route used within this is never evicted
 
 _CONTROL = const(4)  # acomm.frame.CONTROL
 _AVAILABLE = const(1)
@@ -34,35 +129,149 @@ _UNAVAILABLE = const(2)
 _EV_AVAILABILITY = const(22)
 _TRANSMITTED = const(4)
 _FAILED = const(8)
-_REPLY_KIND = const(2)  # acomm.transport.routewire.REPLY
-_FLOOD_KIND = const(0)  # acomm.transport.routewire.FLOOD
 _UNKNOWN_ETX16 = const(32)
 _CONTROL_PRIORITY = const(3)
 _CONTROL_LIFESPAN_S = const(30)
-_MAX_HELD = const(16)  # rebroadcasts waiting for their jitter; more are dropped (a flood has other copies)
+_MAX_HELD = const(16)  # control frames waiting for their time; more are dropped (a flood has other copies)
+_SEEN_CAP = const(32)  # the requests remembered as seen
+
+
+# -- on the water ------------------------------------------------------------------------------
+def _chk(v, top, what):
+    # v as a field of 0..top; top < 0: a cost, any int >= 0, saturated at MAX_COST
+    if not isinstance(v, int) or v < 0 or v > top >= 0:
+        raise EncodeError("%s %r outside 0..%d" % (what, v, top) if top >= 0 else "%s %r is not a non-negative int" % (what, v))
+    return MAX_COST if top < 0 and v > MAX_COST else v
+
+
+def encode_request(rid, origin, origin_seq, dest, dest_seq, hops, cost):
+    """A route request: 10 bytes. dest_seq UNKNOWN_SEQ when the origin knows none; cost saturates."""
+    o = _chk(origin_seq, 0xFFFE, "origin seq")
+    d = _chk(dest_seq, 0xFFFF, "destination seq")
+    c = _chk(cost, -1, "cost")
+    return bytes((_REQUEST << 6 | _chk(hops, MAX_HOPS, "count"), _chk(rid, 255, "request id"), _chk(origin, 254, "origin"),
+                  o >> 8, o & 0xFF, _chk(dest, 254, "destination"), d >> 8, d & 0xFF, c >> 8, c & 0xFF))
+
+
+def encode_reply(dest, dest_seq, origin, hops, cost, lifetime_ms):
+    """A route reply: 8 bytes. lifetime rounds up to 4 s units, 4 s to 17 min."""
+    units = (lifetime_ms + LIFETIME_UNIT_MS - 1) // LIFETIME_UNIT_MS
+    s = _chk(dest_seq, 0xFFFE, "destination seq")
+    c = _chk(cost, -1, "cost")
+    return bytes((_REPLY << 6 | _chk(hops, MAX_HOPS, "count"), _chk(dest, 254, "destination"), s >> 8, s & 0xFF,
+                  _chk(origin, 254, "origin"), c >> 8, c & 0xFF, 1 if units < 1 else (255 if units > 255 else units)))
+
+
+def encode_error(lost):
+    """A route error for [(dest, seq)], 1..16 of them: 1 + 3 bytes each."""
+    if not 1 <= len(lost) <= MAX_ERRORS:
+        raise EncodeError("a route error names 1..%d destinations, not %d" % (MAX_ERRORS, len(lost)))
+    out = bytearray(1 + 3 * len(lost))
+    out[0] = _ERROR << 6 | len(lost)
+    i = 1
+    for d, s in lost:
+        out[i] = _chk(d, 254, "destination")
+        s = _chk(s, 0xFFFE, "destination seq")
+        out[i + 1] = s >> 8
+        out[i + 2] = s & 0xFF
+        i += 3
+    return bytes(out)
+
+
+def encode_flood(origin, mid, hops, data):
+    """A flood: origin, its id 0..255, hops 0..63, then 1..MAX_FLOOD_DATA bytes of data."""
+    if not isinstance(data, (bytes, bytearray, memoryview)) or not 1 <= len(data) <= MAX_FLOOD_DATA:
+        raise EncodeError("flood data must be 1..%d bytes" % MAX_FLOOD_DATA)
+    return bytes((_FLOOD << 6 | _chk(hops, MAX_HOPS, "count"), _chk(origin, 254, "origin"), _chk(mid, 255, "flood id"))) + bytes(data)
+
+
+def decode(data):
+    """-> ("request", rid, origin, origin_seq, dest, dest_seq, hops, cost)
+       | ("reply", dest, dest_seq, origin, hops, cost, lifetime_ms)
+       | ("error", [(dest, seq), ...]) | ("flood", origin, id, hops, data);
+       DecodeError for anything else."""
+    if not data:
+        raise DecodeError("empty route control")
+    kind = data[0] >> 6
+    n = data[0] & 0x3F
+    if kind == _REQUEST:
+        if len(data) != 10:
+            raise DecodeError("route request of %d bytes, expected 10" % len(data))
+        origin, dest = data[2], data[5]
+        oseq = (data[3] << 8) | data[4]
+        cost = (data[8] << 8) | data[9]
+        if origin > 254 or dest > 254 or oseq == UNKNOWN_SEQ or cost > MAX_COST:
+            raise DecodeError("route request with a reserved id, origin sequence number or cost")
+        return ("request", data[1], origin, oseq, dest, (data[6] << 8) | data[7], n, cost)
+    if kind == _REPLY:
+        if len(data) != 8:
+            raise DecodeError("route reply of %d bytes, expected 8" % len(data))
+        dest, origin = data[1], data[4]
+        dseq = (data[2] << 8) | data[3]
+        cost = (data[5] << 8) | data[6]
+        if dest > 254 or origin > 254 or dseq == UNKNOWN_SEQ or cost > MAX_COST or data[7] == 0:
+            raise DecodeError("route reply with a reserved id, sequence number or cost, or no lifetime")
+        return ("reply", dest, dseq, origin, n, cost, data[7] * LIFETIME_UNIT_MS)
+    if kind == _ERROR:
+        if not 1 <= n <= MAX_ERRORS or len(data) != 1 + 3 * n:
+            raise DecodeError("route error for %d destinations in %d bytes" % (n, len(data)))
+        lost = []
+        for i in range(1, len(data), 3):
+            s = (data[i + 1] << 8) | data[i + 2]
+            if data[i] > 254 or s == UNKNOWN_SEQ:
+                raise DecodeError("route error with a reserved id or sequence number")
+            lost.append((data[i], s))
+        return ("error", lost)
+    # kind 0, a flood: data of 1..MAX_FLOOD_DATA bytes, never from the broadcast id
+    if not 4 <= len(data) <= 3 + MAX_FLOOD_DATA or data[1] > 254:
+        raise DecodeError("flood of %d bytes or from a reserved id" % len(data))
+    return ("flood", data[1], data[2], n, bytes(data[3:]))
+
+
+def seq_newer(a, b):
+    """True when sequence number a is newer than b (modulo 65,535; -1 is older than any)."""
+    if b < 0:
+        return a >= 0
+    if a < 0:
+        return False
+    d = (a - b) % _SEQ_MOD
+    return 0 < d < _HALF
 
 
 class Routing:
     def __init__(self, node_id, names, links, next_id, media=("acoustic",), capacity=32, tries=3,
                  search_ms=60000, hold_ms=60000, lifetime_ms=600000, jitter_ms=None, seed=None, ring=3):
         """links: name -> Link (the node's, read live); next_id(): a fresh link request id."""
+        self.node_id = node_id
         self.names = names
         self.node_links = links
         self._next_id = next_id
         self.media = tuple(media)
-        self.table = RouteTable(capacity)
-        self.finder = RouteFinder(node_id, self.table, self.hop_cost, links=(), tries=tries, search_ms=search_ms,
-                                  lifetime_ms=lifetime_ms, jitter_ms=jitter_ms or 0, hold_ms=hold_ms, ring=ring,
-                                  seed=node_id + 1 if seed is None else seed)
-        self.flooder = None  # acomm.transport.flood.Flooder, made by the first flood sent or heard
-        self._seed = node_id + 7 if seed is None else seed + 6
-        self._nlinks = -1
+        self.capacity = capacity
+        self.tries = tries
+        self.search_ms = search_ms
+        self.hold_ms = hold_ms
+        self.lifetime_ms = lifetime_ms
+        self.ring = ring
+        self.jitter_ms = jitter_ms or 0
         self._auto_jitter = jitter_ms is None
-        self._held = []  # (not before, link name, to, payload)
+        self._rng = Prng(node_id + 1 if seed is None else seed)
+        self._seed = node_id + 7 if seed is None else seed + 6  # the flooder's
+        self.links = ()  # the routing links' names
+        self._nlinks = -1
+        self.seq = 0  # this node's own destination sequence number
+        self._rid = 0
+        self.routes = {}  # destination -> route (the fields above)
+        self._searches = {}  # dest -> [tries left (-1: given up, held off), next try at]
+        self._seen = []  # origin << 8 | request id, oldest first: ints, which take no heap
+        self._held = []  # (not before, link name, to, payload): what poll sends when due
         # link request id -> None (a broadcast) or (link name, hop id, payload, sent again): the
         # control frames whose statuses stop here
         self._rids = {}
-        self.stats = {"control_sent": 0, "control_bytes": 0, "control_dropped": 0, "replies_rerouted": 0}
+        self.flooder = None  # acomm.transport.flood.Flooder, made by the first flood sent or heard
+        self.stats = {"requests": 0, "rebroadcasts": 0, "replies": 0, "errors": 0, "bad": 0, "duplicates": 0,
+                      "refused": 0, "control_sent": 0, "control_bytes": 0, "control_dropped": 0, "replies_rerouted": 0}
+        self.finder = self.table = self
 
     # -- links and costs ------------------------------------------------------------------
     def routes_on(self, link):
@@ -79,25 +288,96 @@ class Routing:
         return nb
 
     def hop_cost(self, now, link_name, hop):
-        """ETX x 16 of the hop times its airtime factor (an int >= 16)."""
+        """ETX x 16 of the hop times its airtime factor (an int >= 16); 32 on a link not there."""
         link = self.node_links.get(link_name)
         if link is None:
-            return None
+            return _UNKNOWN_ETX16
         e = self.neighbours(link).etx16(now, hop)
         c = link.driver.caps  # the driver's own: Link.caps copies them, and this runs per packet and poll
         ms = c.latency_ms + (512000 // c.bitrate if c.bitrate else 60000)  # 64 bytes
         return (_UNKNOWN_ETX16 if e is None else e) * (1 + ms // 1000)
 
+    # -- the table ----------------------------------------------------------------------------
+    def offer(self, now, dest, next_hop, link, cost, seq, lifetime_ms):
+        """A route heard of (a reply, a request's reverse path, traffic passing through). -> True
+        when it is now the route to dest; AcommError for a bad id, cost or sequence number."""
+        if not (0 <= dest <= 254 and 0 <= next_hop <= 254) or cost < 0 or seq >= _SEQ_MOD:
+            raise AcommError("route to %r via %r: bad id, cost or sequence number" % (dest, next_hop))
+        routes = self.routes
+        r = routes.get(dest)
+        if r is not None and r[_VALID] and ticks_diff(r[_EXPIRES], now) > 0:
+            if seq_newer(r[_SEQ], seq) or (r[_SEQ] == seq and cost >= r[_COST]) or (seq < 0 <= r[_SEQ]):
+                if r[_NEXT] == next_hop and r[_SEQ] == seq and cost == r[_COST]:
+                    t = ticks_add(now, lifetime_ms)  # the same route, heard again
+                    if ticks_diff(t, r[_EXPIRES]) > 0:
+                        r[_EXPIRES] = t
+                return False
+        elif r is not None and r[_SEQ] >= 0 and seq_newer(r[_SEQ], seq):
+            return False  # an invalid route's raised number: only fresher news restores it
+        if r is None:
+            if len(routes) >= self.capacity:
+                # dead routes go first (scored above every live one), then the least recently used
+                victim = score = None
+                for d in routes:
+                    x = routes[d]
+                    s = ticks_diff(now, x[_USED]) + (0 if x[_VALID] and ticks_diff(x[_EXPIRES], now) > 0 else _DEAD)
+                    if score is None or s > score:
+                        victim, score = d, s
+                if victim is None or (score < _DEAD and score < _KEEP_MS):
+                    self.stats["refused"] += 1
+                    return False
+                del routes[victim]
+            r = routes[dest] = [0, None, 0, -1, now, False, now]
+        r[_NEXT] = next_hop
+        r[_LINK] = link
+        r[_COST] = cost
+        r[_SEQ] = seq
+        r[_EXPIRES] = ticks_add(now, lifetime_ms)
+        r[_VALID] = True
+        r[_USED] = now
+        return True
+
+    def lookup(self, now, dest):
+        """-> (next hop, link name, cost) of a live route to dest, or None."""
+        r = self.routes.get(dest)
+        if r is None or not r[_VALID] or ticks_diff(r[_EXPIRES], now) <= 0:
+            return None
+        r[_USED] = now
+        return r[_NEXT], r[_LINK], r[_COST]
+
+    def broken(self, now, hop, link_name, named=None):
+        """hop cannot be reached on link_name: its live routes turn invalid (only those a route
+        error named, named = [(dest, seq)], when given), their numbers raised by one, and one
+        error names those that had a number."""
+        routes = self.routes
+        lost = []
+        for d in (routes if named is None else [x[0] for x in named]):
+            r = routes.get(d)
+            if r is None or not r[_VALID] or ticks_diff(r[_EXPIRES], now) <= 0:
+                continue
+            if named is not None:
+                r[_USED] = now  # an error's destinations are looked up
+            if r[_NEXT] == hop and r[_LINK] == link_name:
+                r[_VALID] = False
+                if r[_SEQ] >= 0:
+                    r[_SEQ] = (r[_SEQ] + 1) % _SEQ_MOD
+                    lost.append((d, r[_SEQ]))  # a neighbour's own route has no number to name
+        # routes not through that hop stand, and an error stops here when none was
+        while lost:
+            chunk, lost = lost[:MAX_ERRORS], lost[MAX_ERRORS:]
+            self._queue(now, None, BROADCAST, encode_error(chunk))
+            self.stats["errors"] += 1
+
     # -- the next hop ------------------------------------------------------------------------
     def hop_on(self, now, link, final):
         """The next hop towards final on a routing link: final itself when heard there (unless a
         learned route by this link is cheaper), else that route's hop, else None."""
-        r = self.table.lookup(now, final)
+        r = self.lookup(now, final)
         if r is not None and r[1] != link.name:
             r = None
         if r is not None and link.discovery.state(r[0]) == _UNAVAILABLE:
             # discovery has missed the hop's adverts: the route is broken, and says so
-            self.finder.hop_failed(now, r[0], link.name)
+            self.broken(now, r[0], link.name)
             r = None
         if link.discovery.state(final) == _AVAILABLE:
             # heard directly; a poor direct link loses to a cheaper learned route
@@ -106,25 +386,80 @@ class Routing:
         return None if r is None else r[0]
 
     def search(self, now, final):
-        """No link has a way to final: start (or keep) its search, unless the last one gave up
-        within hold_ms (the packet waits either way)."""
+        """No link has a way to final: start (or keep) its search, unless a live route names it or
+        the last search gave up within hold_ms (the packet waits either way)."""
         self._sync_links()
-        if self.finder.links:
-            self.finder.find(now, final)
+        if self.links and self.lookup(now, final) is None and final not in self._searches:
+            self._searches[final] = [self.tries, now]
+            self._retry(now)
 
+    def searching(self, dest):
+        """Whether a search for dest is running (False when none was asked, or it gave up)."""
+        s = self._searches.get(dest)
+        return s is not None and s[0] >= 0
+
+    def _retry(self, now):
+        # the searches' tries and give-ups that are due
+        searches = self._searches
+        if not searches:
+            return
+        for dest in list(searches):
+            s = searches[dest]
+            if ticks_diff(now, s[1]) < 0:
+                continue
+            if s[0] < 0:
+                del searches[dest]  # held off long enough: the next search asks again
+                continue
+            if s[0] == 0:  # given up
+                if self.hold_ms > 0:
+                    s[0] = -1
+                    s[1] = ticks_add(now, self.hold_ms)
+                else:
+                    del searches[dest]
+                continue
+            # the first try of a search asks only within `ring` relays (AODV's expanding ring):
+            # a route that broke, or a node that moved, is mostly still near, and a ring costs the
+            # nodes around, not the whole network; it waits a tenth of search_ms per relay
+            ttl = self.ring if s[0] == self.tries else 0
+            s[0] -= 1
+            s[1] = ticks_add(now, self.search_ms * ttl // 10 if ttl else self.search_ms)
+            self._rid = (self._rid + 1) % 256
+            self.seq = (self.seq + 1) % _SEQ_MOD
+            r = self.routes.get(dest)
+            known = -1 if r is None else r[_SEQ]
+            # a ring of ttl relays: the count starts that far below MAX_HOPS, where relays stop
+            self._queue(now, None, BROADCAST, encode_request(self._rid, self.node_id, self.seq, dest,
+                                                             known if known >= 0 else UNKNOWN_SEQ,
+                                                             MAX_HOPS - ttl if ttl else 0, 0))
+            self._seen_add(self.node_id << 8 | self._rid)
+            self.stats["requests"] += 1
+
+    def _seen_add(self, key):
+        seen = self._seen
+        seen.append(key)
+        if len(seen) > _SEEN_CAP:
+            seen.pop(0)
+
+    # -- what the transport tells --------------------------------------------------------------
     def learn(self, now, link, origin, hop):
         """Traffic from origin came in by hop on link: a route back to origin, for free."""
-        if origin != hop and self.routes_on(link) and self.table.lookup(now, origin) is None:
-            self.table.offer(now, origin, hop, link.name, self.hop_cost(now, link.name, hop) * 2, -1,
-                             self.finder.lifetime_ms)
+        if origin != hop and self.routes_on(link) and self.lookup(now, origin) is None:
+            self.offer(now, origin, hop, link.name, self.hop_cost(now, link.name, hop) * 2, -1, self.lifetime_ms)
 
     def attempt(self, now, link, hop, answered):
-        """A poll to hop on link was answered, or not (ETX's evidence); three unanswered in a row
-        (the transport's stall) also call hop_failed."""
+        """A poll to hop on link was answered, or not (ETX's evidence). An answer keeps the live
+        routes through hop alive for lifetime_ms at least (AODV's active routes: a route in use
+        does not expire under its traffic)."""
         if self.routes_on(link):
             self.neighbours(link).attempt(now, hop, answered)
             if answered:
-                self.table.refresh(now, hop, link.name, self.finder.lifetime_ms)
+                t = ticks_add(now, self.lifetime_ms)
+                routes = self.routes
+                for d in routes:
+                    r = routes[d]
+                    if (r[_NEXT] == hop and r[_LINK] == link.name and r[_VALID] and ticks_diff(r[_EXPIRES], now) > 0
+                            and ticks_diff(t, r[_EXPIRES]) > 0):
+                        r[_EXPIRES] = t
 
     def hop_failed(self, now, link, hop, window_ms):
         """hop did not answer on link for window_ms: unless it was heard within that window and an
@@ -136,7 +471,7 @@ class Routing:
         heard = d.last_heard(hop)
         if heard is not None and ticks_diff(now, heard) < window_ms + d.period_ms:
             return False
-        self.finder.hop_failed(now, hop, link.name)
+        self.broken(now, hop, link.name)
         # and discovery learns it now, not after its missed adverts: a destination it still calls
         # heard would keep being tried directly instead of searched for. Done here, on the table
         # the console reads, so that a board that does not route pays no method for it
@@ -147,48 +482,97 @@ class Routing:
         return True
 
     # -- control frames ----------------------------------------------------------------------
-    def heard(self, now, link, src, payload):
-        """A CONTROL frame's payload from neighbour src on link -> [(origin, data)] of a flood
-        heard for the first time (else [])."""
+    def heard(self, now, link, hop, payload):
+        """A CONTROL frame's payload from neighbour hop on link -> [(origin, data)] of a flood
+        heard for the first time (else ()); bad bytes are counted and dropped."""
         if not self.routes_on(link):
             return ()
-        if payload and payload[0] >> 6 == _FLOOD_KIND:
+        if payload and payload[0] >> 6 == _FLOOD:
             fl = self._flooding()
-            fl.heard(now, link.name, src, payload)
+            fl.heard(now, link.name, hop, payload)
             return [(e[1], e[2]) for e in fl.take_events()]
-        self.finder.heard(now, link.name, src, payload)
+        try:
+            m = decode(payload)
+        except DecodeError:
+            self.stats["bad"] += 1
+            return ()
+        name = link.name
+        st = self.stats
+        if m[0] == "error":
+            self.broken(now, hop, name, m[1])
+            return ()
+        if m[0] == "reply":
+            _, dest, dseq, origin, hops, cost, lifetime = m
+            cost += self.hop_cost(now, name, hop)
+            self.offer(now, dest, hop, name, cost, dseq, lifetime)
+            if origin == self.node_id:
+                if dest in self._searches:
+                    del self._searches[dest]  # found (even after a give-up: a late reply is news)
+                self.lookup(now, dest)  # the route found counts as used (eviction's order)
+                return ()
+            back = self.lookup(now, origin)
+            if back is not None and hops < MAX_HOPS:  # else no way back: the origin will ask again
+                self._queue(now, back[1], back[0], encode_reply(dest, dseq, origin, hops + 1, cost, lifetime))
+            return ()
+        _, rid, origin, oseq, dest, dseq, hops, cost = m
+        if origin == self.node_id:
+            st["duplicates"] += 1
+            return ()
+        cost += self.hop_cost(now, name, hop)
+        # the reverse route, to the origin through the hop it came by; from every copy, not only
+        # the first: the first to arrive is the luckiest draw of the jitter, often a detour, and
+        # the reply, which goes back by these routes, is lost more often the more hops it takes
+        self.offer(now, origin, hop, name, cost, oseq, self.lifetime_ms)
+        key = origin << 8 | rid
+        if key in self._seen:
+            st["duplicates"] += 1
+            return ()
+        self._seen_add(key)
+        if hop != origin:
+            self.offer(now, hop, hop, name, self.hop_cost(now, name, hop), -1, self.lifetime_ms)
+        if dest == self.node_id:
+            if dseq != UNKNOWN_SEQ and seq_newer(dseq, self.seq):
+                self.seq = dseq
+            self.seq = (self.seq + 1) % _SEQ_MOD
+            self._queue(now, name, hop, encode_reply(self.node_id, self.seq, origin, 0, 0, self.lifetime_ms))
+            st["replies"] += 1
+        elif hops < MAX_HOPS:
+            self._queue(ticks_add(now, self._rng.below(self.jitter_ms + 1)) if self.jitter_ms else now, None, BROADCAST,
+                        encode_request(rid, origin, oseq, dest, dseq, hops + 1, cost))
+            st["rebroadcasts"] += 1
         return ()
 
     def flood(self, now, data, hops_limit=None):
         """Floods data to every node (acomm.transport.flood.Flooder.send) -> its id."""
         self._sync_links()
-        if not self.finder.links:
+        if not self.links:
             raise AcommError("no link floods: none is %s" % " or ".join(self.media))
         return self._flooding().send(now, data, hops_limit)  # EncodeError (an AcommError) for bad data
 
     def _sync_links(self):
-        # the routing links' names, for the finder's floods (links can be added after the transport)
+        # the routing links' names, for requests, errors and floods (links can be added after the
+        # transport)
         links = self.node_links
         if len(links) != self._nlinks:
             self._nlinks = len(links)
-            self.finder.links = tuple(n for n in links if self.routes_on(links[n]))
+            self.links = tuple(n for n in links if self.routes_on(links[n]))
         if self._auto_jitter:
             # a rebroadcast waits 0..jitter: wide enough that the neighbours that heard one request
             # seldom start within one short frame of each other (they would collide at the next
             # hop: acoustic modems rarely sense the carrier), 2 x (neighbours + 2) short frames
             j = 0
-            for n in self.finder.links:
+            for n in self.links:
                 link = links[n]
                 bps = link.driver.caps.bitrate or 100
                 nb = link.neighbours
                 k = 2 * (2 + (0 if nb is None else len(nb.table))) * (128000 // bps + 200)
                 if k > j:
                     j = k
-            self.finder.jitter_ms = j
+            self.jitter_ms = j
         fl = self.flooder
         if fl is not None:
-            fl.links = self.finder.links
-            fl.jitter_ms = self.finder.jitter_ms
+            fl.links = self.links
+            fl.jitter_ms = self.jitter_ms
 
     def _flooding(self):
         # the flooder, made on first use: a node that never sees a flood never loads the module
@@ -196,27 +580,28 @@ class Routing:
         if fl is None:
             from .flood import Flooder
 
-            fl = self.flooder = Flooder(self.finder.node_id, links=self.finder.links,
-                                        jitter_ms=self.finder.jitter_ms, seed=self._seed)
+            fl = self.flooder = Flooder(self.node_id, links=self.links, jitter_ms=self.jitter_ms, seed=self._seed)
         return fl
 
+    def _queue(self, at, link_name, to, payload):
+        # a control frame for poll to send at `at` or later; link_name None: on every routing link
+        held = self._held
+        for n in (self.links if link_name is None else (link_name,)):
+            if len(held) < _MAX_HELD:
+                held.append((at, n, to, payload))
+            else:
+                self.stats["control_dropped"] += 1
+
     def poll(self, now):
-        """The finder's retries, and the control frames that are due, onto their links."""
-        f = self.finder
+        """The searches' retries, and the control frames that are due, onto their links."""
         self._sync_links()
-        f.poll(now)
-        f.take_events()  # the waiting packets ask again at the transport's next poll
+        self._retry(now)
         fl = self.flooder
         if fl is not None:
             fl.poll(now)
             for link_name, to, payload in fl.take():
                 self._send(now, link_name, to, payload)
         held = self._held
-        for item in f.take():
-            if len(held) < _MAX_HELD:
-                held.append(item)
-            else:
-                self.stats["control_dropped"] += 1
         if not held:
             return
         keep = []
@@ -262,9 +647,9 @@ class Routing:
         link = self.node_links.get(link_name)
         if link is not None:
             self.attempt(now, link, hop, False)
-        if again or payload[0] >> 6 != _REPLY_KIND:
+        if again or payload[0] >> 6 != _REPLY:
             return True
-        r = self.table.lookup(now, payload[4])  # a reply's origin (acomm.transport.routewire)
+        r = self.lookup(now, payload[4])  # a reply's origin
         if r is not None and (r[0] != hop or r[1] != link_name):
             self.stats["replies_rerouted"] += 1
             self._send(now, r[1], r[0], payload, True)

@@ -7,7 +7,7 @@
 from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.errors import AcommError, EncodeError
 from acomm.prng import Prng
-from acomm.transport import routewire as W
+from acomm.transport import routing as W
 from acomm.transport.flood import BROADCAST, MAX_DATA, Flooder
 from checks import adjacency, raises
 

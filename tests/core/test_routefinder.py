@@ -1,17 +1,47 @@
-# Route discovery without I/O (acomm.transport.routefinder) on small
-# networks of finders joined by a fake medium: a chain found hop by hop,
+# Route discovery without I/O (the searches of acomm.transport.routing) on
+# small networks of nodes joined by a fake medium: a chain found hop by hop,
 # every request rebroadcast at most once per node, a broken hop's error and
 # the new route around it, a search given up, bad bytes dropped, and no
 # loops in any table after random breaks and searches.
 
 from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.prng import Prng
-from acomm.transport.routefinder import BROADCAST, RouteFinder
-from acomm.transport.routetable import RouteTable
+from acomm.transport.routing import BROADCAST, Routing
 from checks import adjacency
 
 T0 = TICKS_MAX - 20000
 HOP = 16  # every hop ETX 1
+
+
+class _Node(Routing):
+    # a node's routing with every hop costing HOP
+    def hop_cost(self, now, link_name, hop):
+        return HOP
+
+
+class _Names:
+    def name_of(self, node_id):
+        return str(node_id)
+
+
+class _Link:
+    # a routing link as Routing sees it: its name and medium, no neighbour table yet, and its
+    # requests put on the fake medium as (sender, to, payload)
+    name = medium = "acoustic"
+    neighbours = None
+
+    def __init__(self, sent, node_id):
+        self.sent = sent
+        self.node_id = node_id
+
+    def request(self, now, rid, dst, payload, lifespan_s, priority, ack=False, ftype=0):
+        self.sent.append((self.node_id, BROADCAST if dst == "*" else int(dst), payload))
+        return True
+
+
+def _node(n, sent=None, jitter_ms=0, seed=1, **opts):
+    link = _Link([] if sent is None else sent, n)
+    return _Node(n, _Names(), {"acoustic": link}, lambda: 1, jitter_ms=jitter_ms, seed=seed, **opts), link
 
 
 class Net:
@@ -19,11 +49,10 @@ class Net:
         self.adj = adjacency(edges)
         self.now = T0
         self.f = {}
+        self.link = {}
+        self.sent = []  # (sender, to, payload) on the medium now
         for n in self.adj:
-            self.f[n] = RouteFinder(n, RouteTable(), lambda now, link, hop: HOP, jitter_ms=jitter_ms,
-                                    search_ms=20000, tries=2, seed=seed + n)
-        self.pending = []  # (when, sender, link, to, payload)
-        self.events = []
+            self.f[n], self.link[n] = _node(n, self.sent, jitter_ms, seed + n, search_ms=20000, tries=2, ring=0, hold_ms=0)
 
     def cut(self, a, b):
         self.adj[a].discard(b)
@@ -32,24 +61,24 @@ class Net:
     def run(self, ms, step=100):
         end = ticks_add(self.now, ms)
         while ticks_diff(end, self.now) > 0:
-            for n, f in self.f.items():
-                f.poll(self.now)
-                for when, link, to, payload in f.take():
-                    self.pending.append((when, n, link, to, payload))
-                self.events += [(n,) + e for e in f.take_events()]
-            due = [p for p in self.pending if ticks_diff(self.now, p[0]) >= 0]
-            self.pending = [p for p in self.pending if ticks_diff(self.now, p[0]) < 0]
-            for _, n, link, to, payload in due:
+            for f in self.f.values():
+                f.poll(self.now)  # what is due goes on the medium
+            due, self.sent[:] = self.sent[:], []
+            for n, to, payload in due:
                 for m in sorted(self.adj[n]):
                     if to == BROADCAST or to == m:
-                        self.f[m].heard(self.now, link, n, payload)
+                        self.f[m].heard(self.now, self.link[m], n, payload)
             self.now = ticks_add(self.now, step)
+
+    def found(self, a, b):
+        # a's search for b is over and a holds a live route to b
+        return not self.f[a].searching(b) and self.f[a].lookup(self.now, b) is not None
 
     def path(self, a, b):
         # follow next hops from a to b; None when a route is missing; AssertionError on a loop
         seen = [a]
         while a != b:
-            r = self.f[a].table.lookup(self.now, b)
+            r = self.f[a].lookup(self.now, b)
             if r is None:
                 return None
             a = r[0]
@@ -60,15 +89,17 @@ class Net:
 
 def test_a_chain_is_found_hop_by_hop_and_each_node_rebroadcasts_once():
     net = Net([(1, 2), (2, 3), (3, 4), (4, 5), (5, 6)])
-    net.f[1].find(net.now, 6)
+    net.f[1].search(net.now, 6)
+    assert net.f[1].searching(6)
     net.run(15000)
-    assert (1, "found", 6, 5 * HOP) in net.events
+    assert net.found(1, 6) and net.f[1].lookup(net.now, 6)[2] == 5 * HOP
     assert net.path(1, 6) == [1, 2, 3, 4, 5, 6]
     assert net.path(6, 1) == [6, 5, 4, 3, 2, 1]  # the reverse routes, learned on the way
     assert [net.f[n].stats["rebroadcasts"] for n in (2, 3, 4, 5)] == [1, 1, 1, 1]
     assert net.f[6].stats["replies"] == 1 and net.f[6].stats["rebroadcasts"] == 0
-    net.f[1].find(net.now, 6)  # known now: found at once, nothing sent
-    assert net.f[1].take() == [] and net.f[1].take_events() == [("found", 6, 5 * HOP)]
+    net.f[1].search(net.now, 6)  # known now: nothing sent
+    net.f[1].poll(net.now)
+    assert net.sent == [] and not net.f[1].searching(6) and net.f[1].stats["requests"] == 1
 
 
 def test_a_grid_floods_each_request_once_per_node_and_finds_a_loop_free_route():
@@ -81,9 +112,9 @@ def test_a_grid_floods_each_request_once_per_node_and_finds_a_loop_free_route():
             if r < 3:
                 edges.append((n, n + 4))
     net = Net(edges)
-    net.f[1].find(net.now, 16)
+    net.f[1].search(net.now, 16)
     net.run(20000)
-    assert any(e[:3] == (1, "found", 16) for e in net.events)
+    assert net.found(1, 16)
     p = net.path(1, 16)
     assert p is not None and p[0] == 1 and p[-1] == 16 and len(p) >= 7
     assert all(net.f[n].stats["rebroadcasts"] <= 1 for n in net.f)
@@ -92,32 +123,48 @@ def test_a_grid_floods_each_request_once_per_node_and_finds_a_loop_free_route():
 def test_a_broken_hop_sends_an_error_and_a_new_search_goes_around():
     # two ways from 1 to 4: 1-2-3-4 and 1-5-6-7-4
     net = Net([(1, 2), (2, 3), (3, 4), (1, 5), (5, 6), (6, 7), (7, 4)], jitter_ms=0)
-    net.f[1].find(net.now, 4)
+    net.f[1].search(net.now, 4)
     net.run(10000)
     assert net.path(1, 4) == [1, 2, 3, 4]
     net.cut(3, 4)
-    net.f[3].hop_failed(net.now, 4, "acoustic")
+    net.f[3].broken(net.now, 4, "acoustic")
     net.run(5000)
     assert net.path(1, 4) is None  # the error reached the source
     assert net.f[2].stats["errors"] == 1 and net.f[1].stats["errors"] == 1
-    net.f[1].find(net.now, 4)
+    net.f[1].search(net.now, 4)
     net.run(10000)
     assert net.path(1, 4) == [1, 5, 6, 7, 4]
 
 
 def test_an_unreachable_destination_is_given_up_after_its_tries():
     net = Net([(1, 2), (3, 4)])
-    net.f[1].find(net.now, 4)
+    net.f[1].search(net.now, 4)
     net.run(45000)
-    assert (1, "unreachable", 4) in net.events
+    assert not net.f[1].searching(4) and net.f[1].lookup(net.now, 4) is None
     assert net.f[1].stats["requests"] == 2
 
 
+def test_a_search_given_up_is_held_off():
+    sent = []
+    f, link = _node(1, sent, search_ms=10000, tries=1, hold_ms=30000, ring=0)
+    f.search(T0, 4)
+    assert f.stats["requests"] == 1
+    f.poll(ticks_add(T0, 10000))  # given up
+    assert not f.searching(4)
+    f.search(ticks_add(T0, 20000), 4)  # held off: nothing asked
+    assert f.stats["requests"] == 1
+    f.poll(ticks_add(T0, 40000))
+    f.search(ticks_add(T0, 40000), 4)  # over: asked again
+    assert f.stats["requests"] == 2 and f.searching(4)
+
+
 def test_bad_bytes_are_counted_and_dropped():
-    f = RouteFinder(1, RouteTable(), lambda now, link, hop: None)
-    for junk in (b"", b"\x00", b"\xff" * 10, b"\x40" + bytes(3)):
-        f.heard(T0, "acoustic", 2, junk)
-    assert f.stats["bad"] == 4 and f.take() == [] and f.table.routes == {}
+    f, link = _node(1)
+    for junk in (b"", b"\x40", b"\xff" * 10, b"\x40" + bytes(3), b"\x80" + bytes(8)):
+        assert f.heard(T0, link, 2, junk) == ()
+    f.heard(T0, link, 2, b"\x00")  # a flood's kind: the flooder counts it
+    f.poll(T0)
+    assert f.stats["bad"] == 5 and f.flooder.stats["bad"] == 1 and link.sent == [] and f.routes == {}
 
 
 def test_no_loops_after_random_breaks_and_searches():
@@ -135,44 +182,43 @@ def test_no_loops_after_random_breaks_and_searches():
         for _ in range(6):
             a, b = rng.range(1, 12), rng.range(1, 12)
             if a != b:
-                net.f[a].find(net.now, b)
+                net.f[a].search(net.now, b)
             net.run(8000)
+            if a != b and net.found(a, b):
+                found += 1
             x = rng.range(1, 12)
             if net.adj[x]:
                 y = sorted(net.adj[x])[rng.below(len(net.adj[x]))]
                 net.cut(x, y)
-                net.f[x].hop_failed(net.now, y, "acoustic")
-                net.f[y].hop_failed(net.now, x, "acoustic")
+                net.f[x].broken(net.now, y, "acoustic")
+                net.f[y].broken(net.now, x, "acoustic")
             net.run(4000)
             for s in net.f:
                 for d in net.f:
                     if s != d and net.path(s, d) is not None:  # raises on a loop
                         routed += 1
-        found += sum(1 for e in net.events if e[1] == "found")
     assert found >= 12 and routed >= 200  # the searches did find routes, and many stood
 
 
 def test_a_cheaper_later_copy_of_a_request_moves_the_reverse_route():
-    from acomm.transport import routewire as W
+    from acomm.transport import routing as W
 
-    t = RouteTable()
-    f = RouteFinder(5, t, lambda now, link, hop: 16, jitter_ms=0)
-    f.heard(0, "acoustic", 2, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 4, 900))  # first, a detour
-    assert t.lookup(0, 9)[:2] == (2, "acoustic") and f.stats["rebroadcasts"] == 1
-    f.heard(10, "acoustic", 3, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 1, 100))  # a copy, cheaper
-    assert t.lookup(10, 9) == (3, "acoustic", 116)  # the reply will go back the cheap way
+    f, link = _node(5)
+    f.heard(0, link, 2, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 4, 900))  # first, a detour
+    assert f.lookup(0, 9)[:2] == (2, "acoustic") and f.stats["rebroadcasts"] == 1
+    f.heard(10, link, 3, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 1, 100))  # a copy, cheaper
+    assert f.lookup(10, 9) == (3, "acoustic", 116)  # the reply will go back the cheap way
     assert f.stats["rebroadcasts"] == 1 and f.stats["duplicates"] == 1  # still passed on once
-    f.heard(20, "acoustic", 4, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 2, 500))  # dearer: no change
-    assert t.lookup(20, 9)[0] == 3
+    f.heard(20, link, 4, W.encode_request(1, 9, 3, 7, W.UNKNOWN_SEQ, 2, 500))  # dearer: no change
+    assert f.lookup(20, 9)[0] == 3
 
 
 def test_a_flood_payload_is_not_taken_for_route_control():
-    from acomm.transport import routewire as W
+    from acomm.transport import routing as W
 
-    t = RouteTable()
-    f = RouteFinder(5, t, lambda now, link, hop: 16)
-    f.heard(0, "acoustic", 2, W.encode_flood(9, 1, 0, b"all up"))
-    assert f.stats["bad"] == 1 and not f.take() and not t.routes
+    f, link = _node(5)
+    assert f.heard(0, link, 2, W.encode_flood(9, 1, 0, b"all up")) == [(9, b"all up")]
+    assert f.stats["bad"] == 0 and not f.routes and not f._held
 
 
 def test_a_ring_search_asks_the_near_nodes_first_then_the_whole_network():
@@ -181,11 +227,11 @@ def test_a_ring_search_asks_the_near_nodes_first_then_the_whole_network():
     for f in net.f.values():
         f.ring = 2
     f1 = net.f[1]
-    f1.find(net.now, 8)
+    f1.search(net.now, 8)
     net.run(3500)  # the ring's wait is 2/10 of search_ms (20 s): 4 s
-    assert f1.stats["requests"] == 1 and not [e for e in f1.take_events() if e[0] == "found"]
+    assert f1.stats["requests"] == 1 and f1.lookup(net.now, 8) is None
     reached = [n for n in net.f if n != 1 and net.f[n].stats["rebroadcasts"]]
     assert reached == [2, 3], reached  # 2 and 3 passed it on; 4 heard it at MAX_HOPS and stopped
-    assert net.f[4].table.lookup(net.now, 1) is not None and net.f[5].table.lookup(net.now, 1) is None
+    assert net.f[4].lookup(net.now, 1) is not None and net.f[5].lookup(net.now, 1) is None
     net.run(20000)  # the next try floods the chain
-    assert f1.table.lookup(net.now, 8) is not None and f1.stats["requests"] == 2
+    assert f1.lookup(net.now, 8) is not None and f1.stats["requests"] == 2

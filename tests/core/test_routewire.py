@@ -5,7 +5,7 @@
 
 from acomm.errors import DecodeError, EncodeError
 from acomm.prng import Prng
-from acomm.transport import routewire as W
+from acomm.transport import routing as W
 from checks import raises
 
 

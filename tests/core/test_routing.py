@@ -6,7 +6,7 @@
 # is refused; a node that does not route drops route control.
 from acomm.events import EV_PACKET, EV_PACKET_STATUS
 from acomm.transport import Transport
-from acomm.transport import routewire as W
+from acomm.transport import routing as W
 from acomm_sim.channel import Channel
 from acomm_sim.world import World
 

@@ -295,8 +295,8 @@ def _auth_target():
 
 
 def _route_target():
-    # route control and floods (acomm.transport.routewire): what decodes encodes back to the same bytes
-    from acomm.transport import routewire as W
+    # route control and floods (acomm.transport.routing): what decodes encodes back to the same bytes
+    from acomm.transport import routing as W
 
     rng = Prng(136)
     corpus = []

@@ -8,14 +8,16 @@
 # route control heard), route_tries and forged_requests (what it sent).
 from acomm import frame as fr
 from acomm.compat import ticks_diff
-from acomm.transport import routewire as W
-from acomm.transport.routetable import EXPIRES, NEXT, SEQ, VALID
+from acomm.transport import routing as W
 from acomm.transport import segment as sg
 from acomm.catalog import teleop
 from acomm.codec.compress import compress
 from acomm.drivers import seatrac_codes as sc
 
 from ...demo.places import ADDR, AUV, BUOY, DIVER
+
+# acomm.transport.routing's route fields (a route is a list: next hop, link, cost, seq, expires, valid, used)
+NEXT, SEQ, EXPIRES, VALID = 0, 3, 4, 5
 
 NAMES = (BUOY, DIVER, AUV)
 EVE = 14  # the attacker's own beacon id

@@ -92,7 +92,7 @@ from acomm.drivers.mac import Tdma
 from acomm.prng import Prng
 from acomm.transport import Transport
 from acomm.transport import _MAX_RX
-from acomm.transport import routewire as W
+from acomm.transport import routing as W
 from acomm_sim.attacker import Attacker
 from acomm_sim.channel import Channel
 from acomm_sim.ledger import Ledger
