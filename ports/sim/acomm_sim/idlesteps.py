@@ -8,6 +8,8 @@
 # checked against the link's own idle(), and whatever they cannot tell
 # gives the step the World took before. Portable Python.
 
+import sys
+
 from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers.mac import Aloha, MacDriver, Tdma
 from acomm.drivers.transparent import TransparentDriver
@@ -45,11 +47,12 @@ def _timer_steps(link, now, q):
 
 def plain(sn, link):
     # the node's transparent driver when the node is one plain link
-    # (no other links, no transport, its own step, no frame pump),
-    # else None: the only nodes whose empty steps _idle_wake,
-    # _slot_wake and _busy_wake know to skip
+    # (no other links, its own step, no frame pump; a transport only
+    # when transport_due can tell when it has work), else None: the
+    # only nodes whose empty steps _idle_wake, _slot_wake and
+    # _busy_wake know to skip
     node = sn.node
-    if sn.extra or node.transport is not None or sn.step != node.step:
+    if sn.extra or sn.step != node.step:
         return None
     if node._pumps.get(link.name) is not None:
         return None
@@ -57,6 +60,77 @@ def plain(sn, link):
     if d.__class__ is MacDriver:
         d = d.driver
     return d if isinstance(d, TransparentDriver) else None
+
+
+def _earlier(a, b):
+    return b if a is None or (b is not None and ticks_diff(b, a) < 0) else a
+
+
+def transport_due(node, now):
+    # When the node's transport (acomm.transport) next has work of its
+    # own: the time of its first due search retry, held control frame,
+    # flood rebroadcast or reassembly to forget (the first time at or
+    # after which its poll() does something), None when it has no timer,
+    # or False when it may have work at any step (packets of its own or
+    # relayed in progress, route control waiting to be taken) or its
+    # state is not what this reads (the transport changed: nothing is
+    # skipped). A node with a transport is stepped every max_quiet_ms
+    # otherwise, most of a routed network's steps, and they do nothing
+    # when this says so. Reads private fields: the simulator is the
+    # core's test bench.
+    t = node.transport
+    if t is None:
+        return None
+    out = getattr(t, "_out", None)
+    rx = getattr(t, "_rx", None)
+    if out is None or rx is None:
+        return False
+    if out:
+        return False
+    due = None
+    if rx:
+        # _rx_poll forgets a reassembly once now - touched > its timeout
+        # (a private const: MicroPython keeps no such name in the module)
+        timeout = getattr(sys.modules.get(t.__class__.__module__), "_RX_TIMEOUT_MS", None)
+        if timeout is None:
+            return False
+        for r in rx.values():
+            due = _earlier(due, ticks_add(r.touched, timeout + 1))
+    rt = t.router.routing
+    if rt is None:
+        return due
+    f = getattr(rt, "finder", rt)
+    if getattr(f, "_out", None) or getattr(f, "_events", None):
+        return False  # what a search or a request heard made: taken at the next poll
+    searches = getattr(f, "_searches", None)
+    held = getattr(rt, "_held", None)
+    if searches is None or held is None:
+        return False
+    for s in searches.values():
+        due = _earlier(due, s[1])
+    for item in held:
+        due = _earlier(due, item[0])
+    fl = rt.flooder
+    if fl is not None:
+        ms = fl.next_ms(now)
+        if ms is not None:
+            due = _earlier(due, ticks_add(now, ms))
+    return due
+
+
+def _bound(w, due, now, q):
+    # w, or the first step at or after `due` when it comes before w: the
+    # node's steps are at now + k * q up to w, then w (None for q: every
+    # step); None when `due` says "any step"
+    if due is False:
+        return None
+    if due is None or ticks_diff(due, w) >= 0:
+        return w
+    if q is None:
+        return due if ticks_diff(due, now) > 0 else None
+    k = (ticks_diff(due, now) + q - 1) // q
+    t = ticks_add(now, (k if k > 1 else 1) * q)
+    return t if ticks_diff(t, w) < 0 else w
 
 def slot_wake(sn, link, now, start, q):
     # A node with frames queued for its TDMA slot or the end of its ALOHA
@@ -71,6 +145,9 @@ def slot_wake(sn, link, now, start, q):
         return None
     if link.discovery.loss_due(start):
         return None
+    due = transport_due(sn.node, now)
+    if due is False:
+        return None
     m = ticks_diff(start, now) // q  # the steps at now + k * q, k = 1..m
     first = None
     for req in link.queue:
@@ -83,33 +160,79 @@ def slot_wake(sn, link, now, start, q):
             k = 1
         if k <= m:
             w = ticks_add(now, k * q)
+    if not link.idle(w):
+        # an advert falls due while the frames wait: from its step on the
+        # node is stepped at every step (the link is busy), each asking the MAC
+        a = _link_wake(link, now, q)
+        if ticks_diff(a, w) < 0:
+            w = a
     if isinstance(link.driver.mac, Aloha):
         # each skipped step asked ALOHA's may_start(): asked later
         sn.replay = (now, q, link.driver)
+    return _bound(w, due, now, q)
+
+def busy_wake(sn, link, now, q):
+    # A link that is not idle is stepped at every step (q ms apart). For a
+    # plain node those steps do nothing but ask its MAC, until the first
+    # of: the driver's airtime ends (a frame on the air), the MAC lets it
+    # send what it has (a frame queued, an ACK owed, an advert due), an
+    # awaited acknowledgement's or a queued frame's time runs out, an
+    # advert or a peer's loss falls due, or the transport's timer
+    # (transport_due). -> that step, or None (the next step) when it
+    # cannot tell. ALOHA's questions on the skipped steps are asked
+    # later, at their times (World._catch_up).
+    d = plain(sn, link)
+    if d is None:
+        return None
+    fl = link._fl
+    md = link.driver
+    mac = md.mac if md.__class__ is MacDriver else None
+    if mac is not None and not isinstance(mac, MACS):
+        return None
+    if fl.state != _SLOT_IDLE:
+        # on the air: the MAC is not asked until the driver is ready
+        if d.ready(now):
+            return None
+        w = d._busy_until
+        mac = None
+    else:
+        if fl.req is not None or not d.ready(now):
+            return None  # between a ranging job's pings; a driver not ready with nothing on the air
+        disc = link.discovery
+        last = link._last_tx
+        wait = getattr(disc, "_wait", None)
+        if wait is None:
+            return None
+        due = last is None or ticks_diff(now, last) >= wait
+        w = None if due else ticks_add(last, wait)  # the advert
+        if due or len(link.queue) or link._pending_acks:
+            # something to send: it goes when the MAC lets it
+            if mac is None:
+                return None
+            w = mac.next_start(now)
+            if w is None or ticks_diff(w, now) <= 0:
+                return None
+    for e in link._acks._e:
+        w = _earlier(w, e[0].deadline)
+        w = _earlier(w, e[4])
+    for req in link.queue:
+        w = _earlier(w, req.deadline)
+    w = _earlier(w, link.discovery._next)
+    if w is None or ticks_diff(w, now) <= 0:
+        return None
+    w = _bound(w, transport_due(sn.node, now), now, None)
+    if w is not None and isinstance(mac, Aloha):
+        sn.replay = (now, q, md)
     return w
 
-def busy_wake(sn, link, now):
-    # A link sending over a transparent driver is stepped at every step
-    # until the modem's airtime has passed (the driver's _busy_until).
-    # With nothing queued, no acknowledgement awaited and no peer to be
-    # declared lost before then, those steps do nothing: the node's next
-    # step is then. Otherwise None (the next step), as before.
-    d = plain(sn, link)  # a MAC is not asked while the link sends
-    if d is None or len(link.queue) or d.ready(now):
-        return None
-    if link._fl.state == _SLOT_IDLE or len(link._acks):
-        return None
-    t = d._busy_until
-    if ticks_diff(t, now) <= 0 or link.discovery.loss_due(t):
-        return None
-    return t
 
 def idle_wake(sn, link, now, q):
     # A node stepped again and again every max_quiet_ms with nothing to
     # do: its next step that does something is the first of those at
     # which its link is no longer idle (an advert or a peer's loss
-    # falls due). For a node whose steps in between do nothing at all
-    # (one link, no transport, a transparent driver that is ready, an
+    # falls due, or its transport's timer: transport_due). For a node
+    # whose steps in between do nothing at all (one link, a transport
+    # with nothing in progress, a transparent driver that is ready, an
     # empty queue, no MAC, TDMA or ALOHA) that
     # step is found here, and the ones before it are skipped: the node
     # does the same things at the same times. Anything that reaches it
@@ -126,6 +249,9 @@ def idle_wake(sn, link, now, q):
     d = plain(sn, link)
     if d is None or len(link.queue) or not d.ready(now):
         return cap
+    due = transport_due(sn.node, now)
+    if due is False:
+        return cap
     if md is not None and isinstance(md.mac, Aloha):
         # each skipped step asked ALOHA's may_start(): asked later
         sn.replay = (now, q, md)
@@ -133,6 +259,11 @@ def idle_wake(sn, link, now, q):
     # a guess from the timers themselves (the advert's and the loss
     # check's), kept when idle() agrees at that step and the one before;
     # else a search for the first multiple of q, up to _IDLE_HORIZON
+    return _bound(_link_wake(link, now, q), due, now, q)
+
+
+def _link_wake(link, now, q):
+    # the first step now + k * q at which the idle link has work
     k = _timer_steps(link, now, q)
     if k is not None and not link.idle(ticks_add(now, k * q)) and (k == 1 or link.idle(ticks_add(now, (k - 1) * q))):
         return ticks_add(now, k * q)

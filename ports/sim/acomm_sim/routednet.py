@@ -105,7 +105,7 @@ class _Script:
 
 
 class RoutedNet:
-    def __init__(self, scenario, mode, seed=1, nodes=None, flow_period_ms=None):
+    def __init__(self, scenario, mode, seed=1, nodes=None, flow_period_ms=None, fast=True):
         if scenario not in SCENARIOS:
             raise ValueError("scenario is one of %s, not %r" % (", ".join(SCENARIOS), scenario))
         if mode not in MODES:
@@ -115,7 +115,7 @@ class RoutedNet:
         self.seed = seed
         self.rng = Prng(seed * 7919 + SCENARIOS.index(scenario))
         self.ch = Channel(seed=seed, loss_curve=LOSS_CURVE)
-        self.w = World(seed=seed, channel=self.ch)
+        self.w = World(seed=seed, channel=self.ch, fast=fast)  # fast=False: every step taken (tests)
         self.w.names_capacity = 255
         self.names = []
         self.tracks = {}

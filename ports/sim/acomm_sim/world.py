@@ -458,7 +458,7 @@ class World:
                 return None
         link = sn.link
         if not link.idle(now):
-            return idlesteps.busy_wake(sn, link, now) if self.fast else None
+            return idlesteps.busy_wake(sn, link, now, self.step_ms) if self.fast else None
         d = link.driver
         queued = len(link.queue)
         cap = ticks_add(now, self.max_quiet_ms)
