@@ -90,8 +90,7 @@
 # when those were objects of their own.
 
 from ..compat import const, ticks_add, ticks_diff
-from ..errors import AcommError, DecodeError, EncodeError
-from ..prng import Prng
+from ..errors import AcommError, DecodeError
 
 BROADCAST = const(255)  # acomm.link.BROADCAST's node id
 UNKNOWN_SEQ = const(0xFFFF)
@@ -137,9 +136,13 @@ _SEEN_CAP = const(32)  # the requests remembered as seen
 
 
 # -- on the water ------------------------------------------------------------------------------
+# (EncodeError and Prng are imported where they are used: each name of the module takes a slot
+# in its dict, which grows by 6 slots and more at a time)
 def _chk(v, top, what):
     # v as a field of 0..top; top < 0: a cost, any int >= 0, saturated at MAX_COST
     if not isinstance(v, int) or v < 0 or v > top >= 0:
+        from ..errors import EncodeError
+
         raise EncodeError("%s %r outside 0..%d" % (what, v, top) if top >= 0 else "%s %r is not a non-negative int" % (what, v))
     return MAX_COST if top < 0 and v > MAX_COST else v
 
@@ -165,6 +168,8 @@ def encode_reply(dest, dest_seq, origin, hops, cost, lifetime_ms):
 def encode_error(lost):
     """A route error for [(dest, seq)], 1..16 of them: 1 + 3 bytes each."""
     if not 1 <= len(lost) <= MAX_ERRORS:
+        from ..errors import EncodeError
+
         raise EncodeError("a route error names 1..%d destinations, not %d" % (MAX_ERRORS, len(lost)))
     out = bytearray(1 + 3 * len(lost))
     out[0] = _ERROR << 6 | len(lost)
@@ -181,6 +186,8 @@ def encode_error(lost):
 def encode_flood(origin, mid, hops, data):
     """A flood: origin, its id 0..255, hops 0..63, then 1..MAX_FLOOD_DATA bytes of data."""
     if not isinstance(data, (bytes, bytearray, memoryview)) or not 1 <= len(data) <= MAX_FLOOD_DATA:
+        from ..errors import EncodeError
+
         raise EncodeError("flood data must be 1..%d bytes" % MAX_FLOOD_DATA)
     return bytes((_FLOOD << 6 | _chk(hops, MAX_HOPS, "count"), _chk(origin, 254, "origin"), _chk(mid, 255, "flood id"))) + bytes(data)
 
@@ -255,6 +262,8 @@ class Routing:
         self.ring = ring
         self.jitter_ms = jitter_ms or 0
         self._auto_jitter = jitter_ms is None
+        from ..prng import Prng
+
         self._rng = Prng(node_id + 1 if seed is None else seed)
         self._seed = node_id + 7 if seed is None else seed + 6  # the flooder's
         self.links = ()  # the routing links' names
@@ -431,14 +440,10 @@ class Routing:
             self._queue(now, None, BROADCAST, encode_request(self._rid, self.node_id, self.seq, dest,
                                                              known if known >= 0 else UNKNOWN_SEQ,
                                                              MAX_HOPS - ttl if ttl else 0, 0))
-            self._seen_add(self.node_id << 8 | self._rid)
+            self._seen.append(self.node_id << 8 | self._rid)
+            if len(self._seen) > _SEEN_CAP:
+                self._seen.pop(0)
             self.stats["requests"] += 1
-
-    def _seen_add(self, key):
-        seen = self._seen
-        seen.append(key)
-        if len(seen) > _SEEN_CAP:
-            seen.pop(0)
 
     # -- what the transport tells --------------------------------------------------------------
     def learn(self, now, link, origin, hop):
@@ -524,10 +529,13 @@ class Routing:
         # the reply, which goes back by these routes, is lost more often the more hops it takes
         self.offer(now, origin, hop, name, cost, oseq, self.lifetime_ms)
         key = origin << 8 | rid
-        if key in self._seen:
+        seen = self._seen
+        if key in seen:
             st["duplicates"] += 1
             return ()
-        self._seen_add(key)
+        seen.append(key)
+        if len(seen) > _SEEN_CAP:
+            seen.pop(0)
         if hop != origin:
             self.offer(now, hop, hop, name, self.hop_cost(now, name, hop), -1, self.lifetime_ms)
         if dest == self.node_id:
