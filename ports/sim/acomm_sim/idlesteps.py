@@ -91,7 +91,7 @@ def transport_due(node, now):
     if rx:
         # _rx_poll forgets a reassembly once now - touched > its timeout
         # (a private const: MicroPython keeps no such name in the module)
-        timeout = getattr(sys.modules.get(t.__class__.__module__), "_RX_TIMEOUT_MS", None)
+        timeout = getattr(sys.modules.get(getattr(t.__class__, "__module__", None)), "_RX_TIMEOUT_MS", None)
         if timeout is None:
             return False
         for r in rx.values():
