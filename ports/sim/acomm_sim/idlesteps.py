@@ -66,37 +66,46 @@ def _earlier(a, b):
     return b if a is None or (b is not None and ticks_diff(b, a) < 0) else a
 
 
-def transport_due(node, now):
+def _const(obj, name):
+    # a private const of obj's module, or None (MicroPython keeps no such
+    # name in the module, and a class may have no __module__ there)
+    return getattr(sys.modules.get(getattr(obj.__class__, "__module__", None)), name, None)
+
+
+def transport_due(sn, now):
     # When the node's transport (acomm.transport) next has work of its
     # own: the time of its first due search retry, held control frame,
-    # flood rebroadcast or reassembly to forget (the first time at or
-    # after which its poll() does something), None when it has no timer,
-    # or False when it may have work at any step (packets of its own or
-    # relayed in progress, route control waiting to be taken) or its
+    # flood rebroadcast, reassembly to forget or waiting packet's expiry
+    # (the first time at or after which its poll() does something), None
+    # when it has no timer, or False when it may have work at any step
+    # (packets in transfer, route control waiting to be taken) or its
     # state is not what this reads (the transport changed: nothing is
     # skipped). A node with a transport is stepped every max_quiet_ms
     # otherwise, most of a routed network's steps, and they do nothing
     # when this says so. Reads private fields: the simulator is the
     # core's test bench.
-    t = node.transport
+    t = sn.node.transport
     if t is None:
         return None
     out = getattr(t, "_out", None)
     rx = getattr(t, "_rx", None)
     if out is None or rx is None:
         return False
-    if out:
-        return False
+    rt = t.router.routing
     due = None
+    if out:
+        if rt is None:
+            return False
+        due = _waiting(sn, t, rt, now)
+        if due is False:
+            return False
     if rx:
         # _rx_poll forgets a reassembly once now - touched > its timeout
-        # (a private const: MicroPython keeps no such name in the module)
-        timeout = getattr(sys.modules.get(getattr(t.__class__, "__module__", None)), "_RX_TIMEOUT_MS", None)
+        timeout = _const(t, "_RX_TIMEOUT_MS")
         if timeout is None:
             return False
         for r in rx.values():
             due = _earlier(due, ticks_add(r.touched, timeout + 1))
-    rt = t.router.routing
     if rt is None:
         return due
     f = getattr(rt, "finder", rt)
@@ -115,6 +124,49 @@ def transport_due(node, now):
         ms = fl.next_ms(now)
         if ms is not None:
             due = _earlier(due, ticks_add(now, ms))
+    return due
+
+
+def _waiting(sn, t, rt, now):
+    # Packets that wait for a route (no transfer started) while a search
+    # for their destination runs or is held off: each poll asks the
+    # router again and gets nothing, until a route or the destination's
+    # adverts are heard (a packet: the node is stepped), the search's
+    # own time (transport_due), the packet's wait after a full relay
+    # (p.wait) or its expiry on the transport's wall clock, which the
+    # World's clock gives when the node says how (sn.wall_unit_ms: wall
+    # seconds = ticks // it, as RoutedNet's nodes have). -> the first of
+    # those times, None, or False when a poll may do more (a transfer
+    # going, a static route, a route or neighbour there, no search).
+    unit = sn.wall_unit_ms
+    searches = getattr(rt, "_searches", None)
+    routes = getattr(rt, "routes", None)
+    rmod = _const(rt, "_VALID"), _const(rt, "_EXPIRES")
+    if unit is None or searches is None or routes is None or None in rmod or t.router.routes:
+        return False
+    links = t.router.node_links
+    for name in links:
+        if not rt.routes_on(links[name]):
+            return False
+    avail = None
+    due = None
+    for p in t._out:
+        if p.out is not None or p.final not in searches:
+            return False
+        r = routes.get(p.final)
+        if r is not None and r[rmod[0]] and ticks_diff(r[rmod[1]], now) > 0:
+            return False  # a live route: it is looked up (and marked used) at every poll
+        for name in links:
+            disc = links[name].discovery
+            if avail is None:
+                avail = _const(disc, "_AVAILABLE")
+                if avail is None:
+                    return False
+            if disc.state(p.final) == avail:
+                return False
+        if p.wait is not None:
+            due = _earlier(due, p.wait)
+        due = _earlier(due, p.expiry * unit)
     return due
 
 
@@ -145,7 +197,7 @@ def slot_wake(sn, link, now, start, q):
         return None
     if link.discovery.loss_due(start):
         return None
-    due = transport_due(sn.node, now)
+    due = transport_due(sn, now)
     if due is False:
         return None
     m = ticks_diff(start, now) // q  # the steps at now + k * q, k = 1..m
@@ -220,7 +272,7 @@ def busy_wake(sn, link, now, q):
     w = _earlier(w, link.discovery._next)
     if w is None or ticks_diff(w, now) <= 0:
         return None
-    w = _bound(w, transport_due(sn.node, now), now, None)
+    w = _bound(w, transport_due(sn, now), now, None)
     if w is not None and isinstance(mac, Aloha):
         sn.replay = (now, q, md)
     return w
@@ -249,7 +301,7 @@ def idle_wake(sn, link, now, q):
     d = plain(sn, link)
     if d is None or len(link.queue) or not d.ready(now):
         return cap
-    due = transport_due(sn.node, now)
+    due = transport_due(sn, now)
     if due is False:
         return cap
     if md is not None and isinstance(md.mac, Aloha):

@@ -216,6 +216,7 @@ class RoutedNet:
         # the route finder's and flooder's random draws differ per seed, not only per node id
         routing = None if self.mode == "oracle" else {"seed": self.seed * 1000 + i}
         sn.t = Transport.of(sn.node, wall=lambda: self.w.now() // 1000, routing=routing)
+        sn.wall_unit_ms = 1000  # that wall clock, for the World (idlesteps)
 
     def _listener(self, me):
         def on_event(ev):

@@ -236,6 +236,10 @@ class SimNode:
         # (time, period, MacDriver) of steps skipped whose MAC question is
         # still to be asked (idlesteps, World._catch_up), or None
         self.replay = None
+        # the node's transport reads wall seconds = World ticks // this
+        # (idlesteps skips the steps of packets that wait for a route up
+        # to their expiry), or None when its wall clock is its own
+        self.wall_unit_ms = None
 
     @property
     def link(self):
