@@ -201,24 +201,25 @@ def decode(data):
         raise DecodeError("empty route control")
     kind = data[0] >> 6
     n = data[0] & 0x3F
-    if kind == _REQUEST:
-        if len(data) != 10:
-            raise DecodeError("route request of %d bytes, expected 10" % len(data))
-        origin, dest = data[2], data[5]
-        oseq = (data[3] << 8) | data[4]
-        cost = (data[8] << 8) | data[9]
-        if origin > 254 or dest > 254 or oseq == UNKNOWN_SEQ or cost > MAX_COST:
-            raise DecodeError("route request with a reserved id, origin sequence number or cost")
-        return ("request", data[1], origin, oseq, dest, (data[6] << 8) | data[7], n, cost)
-    if kind == _REPLY:
-        if len(data) != 8:
-            raise DecodeError("route reply of %d bytes, expected 8" % len(data))
-        dest, origin = data[1], data[4]
-        dseq = (data[2] << 8) | data[3]
-        cost = (data[5] << 8) | data[6]
-        if dest > 254 or origin > 254 or dseq == UNKNOWN_SEQ or cost > MAX_COST or data[7] == 0:
-            raise DecodeError("route reply with a reserved id, sequence number or cost, or no lifetime")
-        return ("reply", dest, dseq, origin, n, cost, data[7] * LIFETIME_UNIT_MS)
+    if kind == _REQUEST or kind == _REPLY:
+        # the same checks on both: their ids (origin and destination), sequence number and cost
+        if kind == _REQUEST:
+            if len(data) != 10:
+                raise DecodeError("route request of %d bytes, expected 10" % len(data))
+            a, b = data[2], data[5]  # origin, dest
+            s = (data[3] << 8) | data[4]  # the origin's
+            cost = (data[8] << 8) | data[9]
+        else:
+            if len(data) != 8:
+                raise DecodeError("route reply of %d bytes, expected 8" % len(data))
+            a, b = data[1], data[4]  # dest, origin
+            s = (data[2] << 8) | data[3]  # the destination's
+            cost = (data[5] << 8) | data[6]
+        if a > 254 or b > 254 or s == UNKNOWN_SEQ or cost > MAX_COST or (kind == _REPLY and data[7] == 0):
+            raise DecodeError("route control with a reserved id, sequence number or cost, or no lifetime")
+        if kind == _REQUEST:
+            return ("request", data[1], a, s, b, (data[6] << 8) | data[7], n, cost)
+        return ("reply", a, s, b, n, cost, data[7] * LIFETIME_UNIT_MS)
     if kind == _ERROR:
         if not 1 <= n <= MAX_ERRORS or len(data) != 1 + 3 * n:
             raise DecodeError("route error for %d destinations in %d bytes" % (n, len(data)))
