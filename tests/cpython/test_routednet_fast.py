@@ -46,3 +46,8 @@ def test_learned_routes_run_the_same_with_and_without_the_shortcuts():
 
 def test_flooding_runs_the_same_with_and_without_the_shortcuts():
     _same("chain", "flooding", None, 4)
+
+
+def test_static_routes_run_the_same_with_and_without_the_shortcuts():
+    net = _same("chain", "oracle", None, 4)
+    assert net.got

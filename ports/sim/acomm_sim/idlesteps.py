@@ -75,10 +75,10 @@ def _const(obj, name):
 def transport_due(sn, now):
     # When the node's transport (acomm.transport) next has work of its
     # own: the time of its first due search retry, held control frame,
-    # flood rebroadcast, reassembly to forget or waiting packet's expiry
-    # (the first time at or after which its poll() does something), None
-    # when it has no timer, or False when it may have work at any step
-    # (packets in transfer, route control waiting to be taken) or its
+    # flood rebroadcast, reassembly to forget or packet's (_packets): the
+    # first time at or after which its poll() does something; None when
+    # it has no timer, or False when it may have work at any step
+    # (fragments to hand the link, route control waiting to be taken) or its
     # state is not what this reads (the transport changed: nothing is
     # skipped). A node with a transport is stepped every max_quiet_ms
     # otherwise, most of a routed network's steps, and they do nothing
@@ -94,9 +94,7 @@ def transport_due(sn, now):
     rt = t.router.routing
     due = None
     if out:
-        if rt is None:
-            return False
-        due = _waiting(sn, t, rt, now)
+        due = _packets(sn, t, rt, now)
         if due is False:
             return False
     if rx:
@@ -127,47 +125,75 @@ def transport_due(sn, now):
     return due
 
 
-def _waiting(sn, t, rt, now):
-    # Packets that wait for a route (no transfer started) while a search
-    # for their destination runs or is held off: each poll asks the
-    # router again and gets nothing, until a route or the destination's
-    # adverts are heard (a packet: the node is stepped), the search's
-    # own time (transport_due), the packet's wait after a full relay
-    # (p.wait) or its expiry on the transport's wall clock, which the
-    # World's clock gives when the node says how (sn.wall_unit_ms: wall
-    # seconds = ticks // it, as RoutedNet's nodes have). -> the first of
-    # those times, None, or False when a poll may do more (a transfer
-    # going, a static route, a route or neighbour there, no search).
+def _packets(sn, t, rt, now):
+    # The transport's packets (its _out) when its poll does nothing for
+    # them until a time: a transfer whose poll is out (the link's SACK
+    # awaited: its timer, or the poll still on the air) or whose pipeline
+    # is full, and a packet that waits for a route while a search for its
+    # destination runs or is held off (each poll asks the router in vain
+    # until a route or the destination's adverts are heard: a packet, so
+    # the node is stepped), up to the packet's wait after a full relay
+    # and its expiry on the transport's wall clock, which the World's
+    # clock gives when the node says how (sn.wall_unit_ms: wall seconds =
+    # ticks // it, as RoutedNet's nodes have). -> the first of those
+    # times, or False when a poll may do more (fragments to hand the
+    # link, a static route, a route or neighbour there, no search).
     unit = sn.wall_unit_ms
-    searches = getattr(rt, "_searches", None)
-    routes = getattr(rt, "routes", None)
-    rmod = _const(rt, "_VALID"), _const(rt, "_EXPIRES")
-    if unit is None or searches is None or routes is None or None in rmod or t.router.routes:
+    pipeline = _const(t, "_PIPELINE")
+    if unit is None or pipeline is None:
         return False
-    links = t.router.node_links
-    for name in links:
-        if not rt.routes_on(links[name]):
-            return False
-    avail = None
-    due = None
+    held = []  # the links with a poll out, as Transport.poll finds them
     for p in t._out:
-        if p.out is not None or p.final not in searches:
+        if p.out is not None and (p.polling or p.timer is not None) and p.link not in held:
+            held.append(p.link)
+    due = None
+    routed = None
+    for p in t._out:
+        due = _earlier(due, p.expiry * unit)
+        if p.out is not None:
+            if p.timer is not None:
+                due = _earlier(due, p.timer)
+            elif p.link not in held and p.inflight < pipeline:
+                return False
+            continue
+        if routed is None:
+            routed = _routed(t, rt)
+            if routed is False:
+                return False
+        searches, routes, valid, expires, avail, links = routed
+        if p.final not in searches:
             return False
         r = routes.get(p.final)
-        if r is not None and r[rmod[0]] and ticks_diff(r[rmod[1]], now) > 0:
+        if r is not None and r[valid] and ticks_diff(r[expires], now) > 0:
             return False  # a live route: it is looked up (and marked used) at every poll
         for name in links:
-            disc = links[name].discovery
-            if avail is None:
-                avail = _const(disc, "_AVAILABLE")
-                if avail is None:
-                    return False
-            if disc.state(p.final) == avail:
+            if links[name].discovery.state(p.final) == avail:
                 return False
         if p.wait is not None:
             due = _earlier(due, p.wait)
-        due = _earlier(due, p.expiry * unit)
     return due
+
+
+def _routed(t, rt):
+    # what _packets reads of learned routing, or False when it cannot
+    # (no routing, static routes, a link that does not route, fields it
+    # does not know)
+    if rt is None or t.router.routes:
+        return False
+    searches = getattr(rt, "_searches", None)
+    routes = getattr(rt, "routes", None)
+    valid, expires = _const(rt, "_VALID"), _const(rt, "_EXPIRES")
+    links = t.router.node_links
+    if searches is None or routes is None or valid is None or expires is None or not links:
+        return False
+    avail = None
+    for name in links:
+        if not rt.routes_on(links[name]):
+            return False
+        avail = _const(links[name].discovery, "_AVAILABLE")
+    if avail is None:
+        return False
+    return searches, routes, valid, expires, avail, links
 
 
 def _bound(w, due, now, q):
