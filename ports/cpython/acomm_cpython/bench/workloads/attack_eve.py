@@ -170,7 +170,8 @@ class Forger:
                 others = [n for n in NAMES if n != victim]
                 dest = others[r.below(2)]
                 via = EVE if k == 0 else ADDR[[n for n in others if n != dest][0]]
-                known = self.table(victim).seq(ADDR[dest])
+                e = self.table(victim).routes.get(ADDR[dest])
+                known = -1 if e is None else e[SEQ]  # the newest number the victim knows, or -1
                 seq = (known + 1 + r.below(1000)) % W.UNKNOWN_SEQ if known >= 0 else r.range(1, 30000)
                 payload = W.encode_reply(ADDR[dest], seq, ADDR[victim], 0, 0, 255 * W.LIFETIME_UNIT_MS)
                 self._control(at + 300 * k, via, ADDR[victim], payload, "route_reply", seal)
