@@ -237,8 +237,8 @@ class SimNode:
         # still to be asked (idlesteps, World._catch_up), or None
         self.replay = None
         # the node's transport reads wall seconds = World ticks // this
-        # (idlesteps skips the steps of packets that wait for a route up
-        # to their expiry), or None when its wall clock is its own
+        # (idlesteps then knows when its packets expire and skips their
+        # empty steps), or None when its wall clock is its own
         self.wall_unit_ms = None
 
     @property
