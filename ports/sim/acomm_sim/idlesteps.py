@@ -210,14 +210,17 @@ def _bound(w, due, now, q):
     t = ticks_add(now, (k if k > 1 else 1) * q)
     return t if ticks_diff(t, w) < 0 else w
 
+
 def slot_wake(sn, link, now, start, q):
     # A node with frames queued for its TDMA slot or the end of its ALOHA
     # backoff (at `start`, beyond max_quiet_ms) is stepped every
     # max_quiet_ms until then; those steps do nothing but ask the MAC
     # (ALOHA's is asked later: World._catch_up) unless a queued frame's
-    # lifespan ends or a peer falls due to be declared lost.
-    # -> the first of those steps at which a frame expires, else
-    # `start`; None when a loss may fall due before (stepped as before).
+    # lifespan ends, an advert or a peer's loss falls due, or the
+    # transport has work (transport_due).
+    # -> the first of those steps at which a frame expires, the advert
+    # falls due or the transport has work, else `start`; None when a loss
+    # may fall due before (stepped as before).
     d = plain(sn, link)
     if d is None or not d.ready(now):
         return None
