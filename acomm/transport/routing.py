@@ -610,16 +610,16 @@ class Routing:
             fl.poll(now)
             for link_name, to, payload in fl.take():
                 self._send(now, link_name, to, payload)
+        # in place, in order: a list made anew each poll would land wherever the heap has a hole
         held = self._held
-        if not held:
-            return
-        keep = []
-        for item in held:
+        i = 0
+        while i < len(held):
+            item = held[i]
             if ticks_diff(now, item[0]) < 0:
-                keep.append(item)
+                i += 1
             else:
+                held.pop(i)
                 self._send(now, item[1], item[2], item[3])
-        self._held = keep
 
     def _send(self, now, link_name, to, payload, again=False):
         link = self.node_links.get(link_name)
