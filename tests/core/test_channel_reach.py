@@ -3,8 +3,9 @@
 # changes nothing: the same transmissions give the same deliveries, the
 # same counters and the same generator state as on a Channel that works
 # out every distance. Stationary nodes on a grid and scattered, nodes
-# without a position, a node that moves, a loss curve replaced; with and
-# without a fixed loss.
+# without a position, a node that moves, AUVs crossing scattered nodes (the
+# stations that stay put kept, the movers placed at each transmission), a
+# loss curve replaced; with and without a fixed loss.
 from acomm.prng import Prng
 from acomm_sim.channel import Channel, Track
 
@@ -37,6 +38,12 @@ def _run(cls, seed, layout, loss, n=24):
         for a in range(1, n + 1):
             ch.set_position(a, 200.0 * a, 0.0, 0.0)
         ch.set_track(3, Track((0.0, 0.0, 0.0), 0, velocity=(2.0, 0.0, 0.0)))
+    if layout == "auvs":
+        # scattered nodes that stay put, and two AUVs crossing them fast
+        for a in range(1, n + 1):
+            ch.set_position(a, rng.below(3000) - 1500.0, rng.below(3000) - 1500.0, rng.below(50))
+        ch.set_track(7, Track((-1500.0, -1500.0, 10.0), 0, waypoints=[(1500.0, 1500.0, 10.0)], speed=60.0))
+        ch.set_track(n - 1, Track((1500.0, -1500.0, 10.0), 0, velocity=(-50.0, 40.0, 0.0)))
     t = 0
     for k in range(120):
         t += rng.below(400)
@@ -57,7 +64,7 @@ def _run(cls, seed, layout, loss, n=24):
 
 
 def test_stations_out_of_reach_take_the_same_draws():
-    for layout in ("grid", "scattered", "moving"):
+    for layout in ("grid", "scattered", "moving", "auvs"):
         for seed, loss in ((1, 0.0), (2, 0.1)):
             fast = _run(Channel, seed, layout, loss)
             slow = _run(EveryDistance, seed, layout, loss)
@@ -68,7 +75,7 @@ def test_stations_out_of_reach_take_the_same_draws():
 def test_a_large_network_skips_the_same_draws():
     # 90 stations over 3 km: most transmissions owe dozens of draws to
     # stations out of reach, which the Channel skips in one step (prngskip)
-    for layout in ("grid", "scattered"):
+    for layout in ("grid", "scattered", "auvs"):
         fast = _run(Channel, 4, layout, 0.0, n=90)
         slow = _run(EveryDistance, 4, layout, 0.0, n=90)
         assert fast == slow, layout

@@ -134,49 +134,73 @@ class Channel(Medium):
     def _near_of(self, src):
         # The stations closer to src than where the loss curve becomes
         # certain (its last point, when that point's loss is 1), or None
-        # when that cannot be known once for all (moving nodes, no such
-        # curve). Every other station loses src's packets for sure. ->
-        # ({dst: distance} within reach, ((stations out of reach before it,
-        # dst, distance, the curve's loss as Prng.chance compares it), ...)
-        # in the stations' order, out of reach after the last, out of reach
-        # in all); kept per source until a position, distance or station
-        # changes (a distance and its loss then stay what they were).
+        # when that cannot be known (no such curve, or src moves: its
+        # transmissions reach every station the slow way). Every other
+        # station loses src's packets for sure. -> ({dst: distance} within
+        # reach, ((stations out of reach before it, dst, distance, the
+        # curve's loss as Prng.chance compares it), ...) in the stations'
+        # order, out of reach after the last, out of reach in all). The
+        # stations that stay put are kept per source until a position,
+        # distance or station changes (a distance and its loss then stay
+        # what they were); those that move (tracks, a few AUVs) are placed
+        # at each transmission, where they are then.
         curve = self.loss_curve
-        if self._tracks or curve is None or curve[-1][1] < 1.0:
+        if curve is None or curve[-1][1] < 1.0 or src in self._tracks:
             return None
         if curve is not self._near_curve:
             # a curve assigned since: what was kept holds the old one's reach and losses
             self._near = {}
             self._grid = None
             self._near_curve = curve
+        tracks = self._tracks
+        lim = curve[-1][0]
         near = self._near.get(src)
         if near is None:
-            lim = curve[-1][0]
-            cand = self._candidates(src, lim)
-            dist = {}
-            for dst in cand:
-                if dst != src:
+            place = self._places()
+            found = []  # (place, dst, distance, loss) of the stations in reach that stay put
+            for dst in self._candidates(src, lim):
+                if dst != src and dst not in tracks:
                     d = self.distance(src, dst)
                     if d < lim:
-                        dist[dst] = d
-            # and, in the stations' order, how many out of reach come
-            # before each one within it, and after the last: from the
-            # stations' places, without walking all of them for each source
-            place = self._place
-            if place is None:
-                place = self._place = {a: i for i, a in enumerate(self._stations)}
-            me = place[src]
-            steps = []
-            prev = -1
-            for i, dst in sorted((place[dst], dst) for dst in dist):
-                d = dist[dst]
-                p = int(interpolate(curve, d) * 0x100000000)
-                steps.append((i - prev - 1 - (1 if prev < me < i else 0), dst, d, p))
-                prev = i
-            last = len(self._stations) - prev - 2 + (1 if me < prev else 0)
-            near = (dist, tuple(steps), last, len(self._stations) - 1 - len(steps))
-            self._near[src] = near
-        return near
+                        found.append((place[dst], dst, d, int(interpolate(curve, d) * 0x100000000)))
+            found.sort()
+            near = self._near[src] = found if tracks else self._reach(src, found)
+        if not tracks:
+            return near
+        place = self._places()
+        moving = []
+        for dst in tracks:
+            if dst != src and dst in place:
+                d = self.distance(src, dst)
+                if d < lim:
+                    moving.append((place[dst], dst, d, int(interpolate(curve, d) * 0x100000000)))
+        if moving:
+            moving.extend(near)
+            moving.sort()
+            return self._reach(src, moving)
+        return self._reach(src, near)
+
+    def _places(self):
+        # addr -> its place in the stations' order
+        place = self._place
+        if place is None:
+            place = self._place = {a: i for i, a in enumerate(self._stations)}
+        return place
+
+    def _reach(self, src, found):
+        # _near_of's answer from the stations in reach, (place, dst,
+        # distance, loss) in the stations' order: how many out of reach
+        # come before each one, and after the last, from the places alone
+        me = self._place[src]
+        dist = {}
+        steps = []
+        prev = -1
+        for i, dst, d, p in found:
+            dist[dst] = d
+            steps.append((i - prev - 1 - (1 if prev < me < i else 0), dst, d, p))
+            prev = i
+        last = len(self._stations) - prev - 2 + (1 if me < prev else 0)
+        return (dist, tuple(steps), last, len(self._stations) - 1 - len(steps))
 
     def _candidates(self, src, lim):
         # the stations that may be within lim metres of src: those in the
