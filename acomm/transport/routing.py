@@ -411,8 +411,11 @@ class Routing:
     def _retry(self, now):
         # the searches' tries and give-ups that are due
         searches = self._searches
-        if not searches:
-            return
+        for dest in searches:
+            if ticks_diff(now, searches[dest][1]) >= 0:
+                break
+        else:
+            return  # none due: no copy of the keys made at every poll
         for dest in list(searches):
             s = searches[dest]
             if ticks_diff(now, s[1]) < 0:
