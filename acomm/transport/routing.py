@@ -247,6 +247,8 @@ def seq_newer(a, b):
 
 
 class Routing:
+    """A node's learned routes: its table, its searches and their control frames on its links."""
+
     def __init__(self, node_id, names, links, next_id, media=("acoustic",), capacity=32, tries=3,
                  search_ms=60000, hold_ms=60000, lifetime_ms=600000, jitter_ms=None, seed=None, ring=3):
         """links: name -> Link (the node's, read live); next_id(): a fresh link request id."""
