@@ -153,8 +153,11 @@ class Link:
         self.dup_window_ms = dup_window_ms
         self.overhear = overhear
         if ack_timeout_ms is None:
-            # the frame's way there and the ack's way back, with a margin
-            ack_timeout_ms = 2 * driver.caps.latency_ms + 1000
+            # the frame's way there and the ack's way back, with a margin; behind ALOHA the ack is
+            # a frame like any other at the peer and waits out its random backoff first (a wait
+            # shorter than that resends into the late ack, on a half-duplex modem deaf to it)
+            ack_timeout_ms = 2 * driver.caps.latency_ms + 1000 + getattr(getattr(driver, "mac", None),
+                                                                         "max_backoff_ms", 0)
         self.ack_timeout_ms = ack_timeout_ms
         self._fl = _Inflight()
         # a modem that reports delivery by itself keeps a list of frames

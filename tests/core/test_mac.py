@@ -1,8 +1,11 @@
 # Medium access (acomm.drivers.mac): the TDMA slot table and its guard, ALOHA's
-# random backoff, and the wrapper that gates a driver's ready() for the Link.
+# random backoff, and the wrapper that gates a driver's ready() for the Link
+# (whose default wait for an ack covers the peer's backoff).
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.errors import AcommError
 from acomm.drivers.mac import Aloha, MacDriver, Tdma
+from acomm.link import Link
+from acomm.link.names import NameTable
 from checks import raises
 from scripted_driver import ScriptedDriver
 
@@ -88,3 +91,14 @@ def test_mac_driver_without_a_mac_is_the_driver_and_a_schedule_can_be_swapped_in
     m.take_events()
     m.mac = Tdma(((1, 1000, 100), (2, 1000, 100)), 1)
     assert not m.ready(1500) and m.ready(2150)
+
+
+def test_a_link_behind_aloha_waits_for_an_ack_through_the_peers_backoff():
+    # the peer's ack is a frame like any other there: it waits its own random backoff first, so
+    # the default wait covers the largest one (a shorter wait resends into the late ack)
+    d = ScriptedDriver()
+    names = NameTable()
+    plain = Link("a", d, 1, names)
+    behind = Link("a", MacDriver(d, Aloha(3000)), 1, names)
+    assert behind.ack_timeout_ms == plain.ack_timeout_ms + 3000
+    assert Link("a", MacDriver(d, Aloha(3000)), 1, names, ack_timeout_ms=500).ack_timeout_ms == 500
