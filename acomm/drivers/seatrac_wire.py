@@ -42,12 +42,17 @@ _CST_NAMES = (
 
 def status_name(code):
     """The CST_E name of a status code, or CST_0xNN for one the table lacks."""
-    words = _CST_NAMES.split()
-    key = "%02X" % code
-    for i in range(0, len(words), 2):
-        if words[i] == key:
-            return words[i + 1]
-    return "CST_0x%02X" % code
+    # found in place, not split: a split made a 38-item list and its strings each time a frame
+    # went unanswered, and that peak set the routing buoy's smallest heap
+    t = _CST_NAMES
+    key = "%02X " % code
+    i = t.find(key)
+    while i > 0 and t[i - 1] != " ":  # inside a word: not a code
+        i = t.find(key, i + 1)
+    if i < 0:
+        return "CST_0x%02X" % code
+    j = t.find(" ", i + 3)
+    return t[i + 3:] if j < 0 else t[i + 3:j]
 
 _HEX = b"0123456789ABCDEF"
 

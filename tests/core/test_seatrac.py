@@ -642,3 +642,13 @@ def plausible(rng, d):
             fix += bytes((ack, n)) + rng.bytes(n) + rng.bytes(rng.below(2))
         return cid, fix
     return cid, rng.bytes(rng.range(0, 60))
+
+
+def test_every_status_code_has_its_name_and_an_unknown_one_its_number():
+    from acomm.drivers.seatrac_wire import _CST_NAMES, status_name
+
+    words = _CST_NAMES.split()
+    for i in range(0, len(words), 2):
+        assert status_name(int(words[i], 16)) == words[i + 1]
+    assert status_name(0x02) == "CST_0x02" and status_name(0xFF) == "CST_0xFF"
+    assert status_name(0x3F) == "XCVR_STATE_RESP"  # the last, with no space after it
