@@ -513,13 +513,18 @@ class Transport:
     # (only for rounds without a repoll, whose SACK could answer either),
     # and the wait is the smoothed time plus four deviations, at least
     # twice the smoothed time and 1 s more (a receiver's modem may be busy
-    # a moment), at most twice the link's ack timeout.
+    # a moment), at most twice the link's ack timeout. Each poll left
+    # unanswered doubles it, to that cap (RFC 6298's backoff): only SACKs
+    # that came in time are sampled, so the smoothed time learns the quick
+    # ones, and a receiver whose SACK waits out a random MAC backoff
+    # answers later; polling again at the same short wait puts the repoll
+    # on the air just as that SACK arrives.
     def _sack_timeout(self, p):
         e = self._rtt.get((p.link.name, p.hop))
         cap = 2 * p.link.ack_timeout_ms
         if e is None:
             return p.link.ack_timeout_ms
-        t = e[0] + max(4 * e[1], e[0], 1000)
+        t = (e[0] + max(4 * e[1], e[0], 1000)) << p.misses
         return cap if t > cap else t
 
     def _rtt_sample(self, p, ms):

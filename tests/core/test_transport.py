@@ -189,3 +189,29 @@ def test_an_index_byte_read_as_before_the_start_never_completes_a_packet():
     hdr = sg.packet_header(7, 15)
     r.add(0, hdr + b"a" * 6, 0)
     assert r.count == 2 and not r.complete()
+
+
+def test_the_wait_for_a_sack_doubles_after_each_unanswered_poll():
+    # Only SACKs that come before the wait ends are timed (Karn's rule), so the
+    # smoothed time learns the quick ones; a receiver whose SACK waits out a
+    # random MAC backoff answers later, and polling again at the same short
+    # wait would put the repoll on the air as that SACK arrives. So each poll
+    # left unanswered doubles the wait (RFC 6298's backoff), to the cap.
+    w, a, b, _, ta = net()
+    link = a.node.links[next(iter(a.node.links))]
+
+    class Hop:
+        pass
+
+    p = Hop()
+    p.link, p.hop, p.misses = link, 2, 0
+    assert ta._sack_timeout(p) == link.ack_timeout_ms  # nothing timed yet
+    ta._rtt_sample(p, 400)
+    first = ta._sack_timeout(p)
+    assert first == 400 + 1000
+    p.misses = 1
+    assert ta._sack_timeout(p) == 2 * first
+    p.misses = 2
+    assert ta._sack_timeout(p) == min(4 * first, 2 * link.ack_timeout_ms)
+    p.misses = 9
+    assert ta._sack_timeout(p) == 2 * link.ack_timeout_ms
