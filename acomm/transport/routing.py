@@ -47,13 +47,13 @@
 #    loops when nodes learn from stale replies. A broken hop's routes turn
 #    invalid, kept with their sequence numbers raised by one (as RFC 3561
 #    does) so that only fresher news restores them, and a route error names
-#    them. Bounded: at most `capacity` destinations; a new one takes the
+#    them when a repair fails. Bounded: at most `capacity` destinations; a new one takes the
 #    place of an expired or invalid route first, else of the one used
 #    longest ago; refused (and counted) when every route is valid and used
 #    within a minute.
 #
 # 3. The searches. search(now, dest) floods a request, retried `tries`
-#    times, search_ms apart, then given up and held off for hold_ms (so a
+#    times, search_ms apart and then twice that each time, then given up and held off for hold_ms (so a
 #    node that keeps asking for an unreachable one floods a request per
 #    hold_ms, not one per poll). With ring > 0 a search's first request
 #    goes no further than `ring` relays (its hop count starts at MAX_HOPS -
@@ -66,10 +66,14 @@
 #    simpler, and never an answer from a stale route); it raises its own
 #    sequence number to at least the one asked for. Replies go back hop by
 #    hop along the reverse routes, each hop learning the forward route.
-#    Errors: a node drops every route through the failed hop and broadcasts
-#    one error; a neighbour that routed those destinations through the
-#    sender drops them too and passes the error on, once (errors carry the
-#    raised sequence numbers, so a repeat changes nothing and stops there).
+#    Errors: a node drops every route through a hop of its own that failed
+#    and repairs locally: its next packet for such a destination searches
+#    from here, since custody keeps that packet in its store. Only a search
+#    that gives up broadcasts an error; a neighbour that routed the
+#    destination through the sender drops it too and passes the error on,
+#    once (errors carry the raised sequence numbers, so a repeat changes
+#    nothing and stops there). Whole-network tries wait twice as long each
+#    time (binary exponential backoff, as RFC 3561 asks).
 #
 # 4. The links. Those whose medium (or name) is in `media` (acoustic by
 #    default) route: they carry adverts, so a neighbour is known, and a
@@ -359,8 +363,9 @@ class Routing:
 
     def broken(self, now, hop, link_name, named=None):
         """hop cannot be reached on link_name: its live routes turn invalid (only those a route
-        error named, named = [(dest, seq)], when given), their numbers raised by one, and one
-        error names those that had a number."""
+        error named, named = [(dest, seq)], when given), their numbers raised by one. A route
+        error passes on the ones named that had a number; a hop of this node's own that broke
+        sends none (a packet for those destinations searches from here: a local repair)."""
         routes = self.routes
         lost = []
         for d in (routes if named is None else [x[0] for x in named]):
@@ -373,8 +378,14 @@ class Routing:
                 r[_VALID] = False
                 if r[_SEQ] >= 0:
                     r[_SEQ] = (r[_SEQ] + 1) % _SEQ_MOD
-                    lost.append((d, r[_SEQ]))  # a neighbour's own route has no number to name
-        # routes not through that hop stand, and an error stops here when none was
+                    if named is not None:
+                        lost.append((d, r[_SEQ]))  # a neighbour's own route has no number to name
+        # routes not through that hop stand, and an error stops here when none was. This node's
+        # own broken hop sends no error: custody is hop by hop, so what was sent through here waits
+        # in this node's store, and the nodes behind it lose nothing by keeping their routes to it.
+        # An error at once would make every source routing through here flood a search of its
+        # own, and on a busy acoustic channel most hops called broken are alive, only unheard for
+        # a while. A search from here that gives up sends the error (_retry)
         while lost:
             chunk, lost = lost[:MAX_ERRORS], lost[MAX_ERRORS:]
             self._queue(now, None, BROADCAST, encode_error(chunk))
@@ -426,6 +437,12 @@ class Routing:
                 del searches[dest]  # held off long enough: the next search asks again
                 continue
             if s[0] == 0:  # given up
+                # a repair that failed here: now the nodes that route through this one learn it,
+                # and find their own way round
+                r = self.routes.get(dest)
+                if r is not None and not r[_VALID] and r[_SEQ] >= 0:
+                    self._queue(now, None, BROADCAST, encode_error([(dest, r[_SEQ])]))
+                    self.stats["errors"] += 1
                 if self.hold_ms > 0:
                     s[0] = -1
                     s[1] = ticks_add(now, self.hold_ms)
@@ -436,8 +453,12 @@ class Routing:
             # a route that broke, or a node that moved, is mostly still near, and a ring costs the
             # nodes around, not the whole network; it waits a tenth of search_ms per relay
             ttl = self.ring if s[0] == self.tries else 0
+            # whole-network tries wait twice as long each time (AODV's binary exponential backoff):
+            # over many acoustic hops a reply can take longer than search_ms, and a flood sent just
+            # before it lands costs every node a frame for nothing
+            n = self.tries - s[0] - (1 if self.ring else 0)
             s[0] -= 1
-            s[1] = ticks_add(now, self.search_ms * ttl // 10 if ttl else self.search_ms)
+            s[1] = ticks_add(now, self.search_ms * ttl // 10 if ttl else self.search_ms << n)
             self._rid = (self._rid + 1) % 256
             self.seq = (self.seq + 1) % _SEQ_MOD
             r = self.routes.get(dest)
@@ -475,7 +496,7 @@ class Routing:
     def hop_failed(self, now, link, hop, window_ms):
         """hop did not answer on link for window_ms: unless it was heard within that window and an
         advert period (alive: its answers were lost to collisions, and the transfer goes on
-        trying), routes through it turn invalid and an error goes out. -> True when they did."""
+        trying), routes through it turn invalid (see broken). -> True when they did."""
         if not self.routes_on(link):
             return False
         d = link.discovery

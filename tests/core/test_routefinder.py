@@ -1,8 +1,9 @@
 # Route discovery without I/O (the searches of acomm.transport.routing) on
 # small networks of nodes joined by a fake medium: a chain found hop by hop,
-# every request rebroadcast at most once per node, a broken hop's error and
-# the new route around it, a search given up, bad bytes dropped, and no
-# loops in any table after random breaks and searches.
+# every request rebroadcast at most once per node, a broken hop repaired
+# where it broke, the error of a repair that failed and the way round it,
+# retries backing off, a search given up, bad bytes dropped, and no loops in
+# any table after random breaks and searches.
 
 from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.prng import Prng
@@ -120,8 +121,9 @@ def test_a_grid_floods_each_request_once_per_node_and_finds_a_loop_free_route():
     assert all(net.f[n].stats["rebroadcasts"] <= 1 for n in net.f)
 
 
-def test_a_broken_hop_sends_an_error_and_a_new_search_goes_around():
-    # two ways from 1 to 4: 1-2-3-4 and 1-5-6-7-4
+def test_a_broken_hop_is_repaired_where_it_broke_and_sends_no_error():
+    # two ways from 1 to 4: 1-2-3-4 and 1-5-6-7-4; custody keeps 3's packets at 3, so 3 searches
+    # itself, and the reply that comes back to it teaches the nodes on its way the fresh route
     net = Net([(1, 2), (2, 3), (3, 4), (1, 5), (5, 6), (6, 7), (7, 4)], jitter_ms=0)
     net.f[1].search(net.now, 4)
     net.run(10000)
@@ -129,17 +131,64 @@ def test_a_broken_hop_sends_an_error_and_a_new_search_goes_around():
     net.cut(3, 4)
     net.f[3].broken(net.now, 4, "acoustic")
     net.run(5000)
-    assert net.path(1, 4) is None  # the error reached the source
-    assert net.f[2].stats["errors"] == 1 and net.f[1].stats["errors"] == 1
+    assert all(f.stats["errors"] == 0 for f in net.f.values())
+    assert net.f[3].lookup(net.now, 4) is None and net.f[1].lookup(net.now, 4)[0] == 2  # still sent to 3
+    net.f[3].search(net.now, 4)
+    net.run(15000)
+    assert net.path(3, 4) == [3, 2, 1, 5, 6, 7, 4]
+    assert net.path(1, 4) == [1, 5, 6, 7, 4]  # the fresher reply moved 1's route, with no loop
+    assert all(f.stats["errors"] == 0 for f in net.f.values())
+
+
+def test_a_repair_that_gives_up_sends_the_error_and_the_source_goes_around():
+    # 1-2-3-4 and 1-5-6-7-4; 3 loses 4 and cannot find it (2 is cut off from 1 too)
+    net = Net([(1, 2), (2, 3), (3, 4), (1, 5), (5, 6), (6, 7), (7, 4)], jitter_ms=0)
     net.f[1].search(net.now, 4)
     net.run(10000)
+    net.cut(3, 4)
+    net.cut(2, 1)
+    net.f[3].broken(net.now, 4, "acoustic")
+    net.f[3].search(net.now, 4)
+    net.run(70000)  # two tries, 20 s and then 40 s apart
+    assert not net.f[3].searching(4) and net.f[3].lookup(net.now, 4) is None
+    assert net.f[3].stats["errors"] == 1 and net.f[2].stats["errors"] == 1  # 2 routed 4 through 3
+    assert net.f[2].lookup(net.now, 4) is None
+    # 1 was cut from 2 before the error came: it routes by 2 until its own hop fails
+    assert net.f[1].lookup(net.now, 4)[0] == 2
+    net.f[1].broken(net.now, 2, "acoustic")
+    net.f[1].search(net.now, 4)
+    net.run(15000)
     assert net.path(1, 4) == [1, 5, 6, 7, 4]
+
+
+def test_whole_network_tries_back_off_twice_as_long_each_time():
+    sent = []
+    f, link = _node(1, sent, search_ms=10000, tries=4, ring=0)
+    f.search(T0, 4)
+    times = [T0]
+    now = T0
+    while len(times) < 4:
+        now = ticks_add(now, 500)
+        before = f.stats["requests"]
+        f.poll(now)
+        if f.stats["requests"] > before:
+            times.append(now)
+    gaps = [ticks_diff(b, a) for a, b in zip(times, times[1:])]
+    assert gaps == [10000, 20000, 40000], gaps
+    # with a ring the ring's try is the short one, and the first whole-network try waits search_ms
+    f, link = _node(1, sent, search_ms=10000, tries=3, ring=3)
+    f.search(T0, 4)
+    assert f._searches[4][1] == ticks_add(T0, 3000)
+    f.poll(ticks_add(T0, 3000))
+    assert f._searches[4][1] == ticks_add(T0, 13000)
+    f.poll(ticks_add(T0, 13000))
+    assert f._searches[4][1] == ticks_add(T0, 33000)
 
 
 def test_an_unreachable_destination_is_given_up_after_its_tries():
     net = Net([(1, 2), (3, 4)])
     net.f[1].search(net.now, 4)
-    net.run(45000)
+    net.run(65000)  # 20 s, then twice that
     assert not net.f[1].searching(4) and net.f[1].lookup(net.now, 4) is None
     assert net.f[1].stats["requests"] == 2
 
