@@ -35,19 +35,33 @@
 # its own sends not yet taken.
 
 from ..compat import const, ticks_add, ticks_diff
-from ..errors import AcommError, DecodeError
+from ..errors import AcommError, EncodeError
 from ..prng import Prng
-from . import routing as W
 
 BROADCAST = const(255)
-MAX_DATA = W.MAX_FLOOD_DATA  # 18 bytes: see acomm.transport.routing
+# the flood message on the water (docs/wire-format.md, "Route control"), kept here and not with
+# routing's messages in acomm.transport.routing, which loads this module: an import back would be
+# a cycle. That module decodes floods too (its decode() names every kind), with the same limits.
+#   kind 0 (top 2 bits) | hops (6 bits)   origin   id   data (1..MAX_DATA bytes)
+MAX_DATA = const(18)  # acomm.transport.routing.MAX_FLOOD_DATA: a sealed flood fits a SeaTrac packet
+MAX_HOPS = const(63)  # acomm.transport.routing.MAX_HOPS
+
+
+def encode_flood(origin, mid, hops, data):
+    """A flood message: origin 0..254, its id 0..255, hops 0..63, then 1..MAX_DATA bytes of data."""
+    if not isinstance(data, (bytes, bytearray, memoryview)) or not 1 <= len(data) <= MAX_DATA:
+        raise EncodeError("flood data must be 1..%d bytes" % MAX_DATA)
+    for v, top, what in ((hops, MAX_HOPS, "count"), (origin, 254, "origin"), (mid, 255, "flood id")):
+        if not isinstance(v, int) or not 0 <= v <= top:
+            raise EncodeError("%s %r outside 0..%d" % (what, v, top))
+    return bytes((hops, origin, mid)) + bytes(data)  # kind 0: the top bits of hops stay clear
 
 
 class Flooder:
     def __init__(self, node_id, links=("acoustic",), jitter_ms=2000, max_copies=3, seen_cap=32,
-                 max_hops=W.MAX_HOPS, pending_cap=8, seed=1):
-        if not 1 <= max_hops <= W.MAX_HOPS:
-            raise AcommError("max_hops %r outside 1..%d" % (max_hops, W.MAX_HOPS))
+                 max_hops=MAX_HOPS, pending_cap=8, seed=1):
+        if not 1 <= max_hops <= MAX_HOPS:
+            raise AcommError("max_hops %r outside 1..%d" % (max_hops, MAX_HOPS))
         self.node_id = node_id
         self.links = tuple(links)
         self.jitter_ms = jitter_ms
@@ -73,7 +87,7 @@ class Flooder:
         if not isinstance(limit, int) or not 1 <= limit <= self.max_hops:
             raise AcommError("hops_limit %r outside 1..%d" % (hops_limit, self.max_hops))
         mid = (self._mid + 1) & 0xFF
-        W.encode_flood(self.node_id, mid, 0, data)  # EncodeError now, not at take()
+        encode_flood(self.node_id, mid, 0, data)  # EncodeError now, not at take()
         if len(self._pending) >= self.pending_cap:
             relays = [p for p in self._pending if p[1] != self.node_id]
             if not relays:
@@ -93,11 +107,10 @@ class Flooder:
         """A CONTROL payload from neighbour hop; True when it was a flood's (bad bytes counted, dropped)."""
         if payload and payload[0] >> 6 != 0:  # not a flood (kind 0)
             return False  # route discovery's
-        try:
-            _, origin, mid, hops, data = W.decode(payload)
-        except DecodeError:
+        if not 4 <= len(payload) <= 3 + MAX_DATA or payload[1] > 254:  # what routing.decode refuses
             self.stats["bad"] += 1
             return True
+        hops, origin, mid, data = payload[0], payload[1], payload[2], bytes(payload[3:])
         if origin == self.node_id:
             return True  # our own, come back
         key = (origin, mid)
@@ -139,7 +152,7 @@ class Flooder:
             if ticks_diff(self._now, p[0]) < 0:
                 keep.append(p)
                 continue
-            payload = W.encode_flood(p[1], p[2], p[3], p[4])
+            payload = encode_flood(p[1], p[2], p[3], p[4])
             for link in self.links:
                 out.append((link, BROADCAST, payload))
             if p[1] != self.node_id:

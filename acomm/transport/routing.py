@@ -28,7 +28,8 @@
 #     kind|n  (dest  dest_seq(2)) x n
 #   flood (acomm.transport.flood, rebroadcast by every node), 3 + 1..MAX_FLOOD_DATA bytes:
 #     kind|hops  origin  id  data
-#     id: the origin's flood counter mod 256; data is the application's
+#     id: the origin's flood counter mod 256; data is the application's;
+#     encoded by acomm.transport.flood (encode_flood), decoded by both
 #
 #    Sequence numbers and costs are big-endian 16-bit. A request for a
 #    destination whose sequence number the origin does not know carries
@@ -185,15 +186,6 @@ def encode_error(lost):
         out[i + 2] = s & 0xFF
         i += 3
     return bytes(out)
-
-
-def encode_flood(origin, mid, hops, data):
-    """A flood: origin, its id 0..255, hops 0..63, then 1..MAX_FLOOD_DATA bytes of data."""
-    if not isinstance(data, (bytes, bytearray, memoryview)) or not 1 <= len(data) <= MAX_FLOOD_DATA:
-        from ..errors import EncodeError
-
-        raise EncodeError("flood data must be 1..%d bytes" % MAX_FLOOD_DATA)
-    return bytes((_FLOOD << 6 | _chk(hops, MAX_HOPS, "count"), _chk(origin, 254, "origin"), _chk(mid, 255, "flood id"))) + bytes(data)
 
 
 def decode(data):

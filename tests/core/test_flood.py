@@ -8,7 +8,7 @@ from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.errors import AcommError, EncodeError
 from acomm.prng import Prng
 from acomm.transport import routing as W
-from acomm.transport.flood import BROADCAST, MAX_DATA, Flooder
+from acomm.transport.flood import BROADCAST, MAX_DATA, Flooder, encode_flood
 from checks import adjacency, raises
 
 T0 = TICKS_MAX - 3000  # every network run crosses the wrap
@@ -161,25 +161,25 @@ def test_the_hop_limit_and_max_hops():
     assert raises(AcommError, f.send, T0, b"x", 5) and raises(AcommError, f.send, T0, b"x", 0)
     assert raises(AcommError, Flooder, 1, ("acoustic",), 2000, 2, 32, 64)
     # a copy that arrives with its count at the limit is delivered, not passed on
-    f.heard(T0, "acoustic", 2, W.encode_flood(9, 1, 3, b"edge"))
+    f.heard(T0, "acoustic", 2, encode_flood(9, 1, 3, b"edge"))
     assert f.take_events() == [("flood", 9, b"edge")] and f.next_ms(T0) is None
 
 
 def test_duplicate_cache_is_bounded():
     f = Flooder(1, seen_cap=4, jitter_ms=0)
     for i in range(6):
-        f.heard(T0, "acoustic", 2, W.encode_flood(7, i, 0, b"m"))
+        f.heard(T0, "acoustic", 2, encode_flood(7, i, 0, b"m"))
     assert len(f._seen) == 4 and len(f.take_events()) == 6
-    f.heard(T0, "acoustic", 3, W.encode_flood(7, 5, 1, b"m"))  # still remembered
+    f.heard(T0, "acoustic", 3, encode_flood(7, 5, 1, b"m"))  # still remembered
     assert f.take_events() == [] and f.stats["duplicates"] == 1
-    f.heard(T0, "acoustic", 3, W.encode_flood(7, 0, 1, b"m"))  # forgotten: delivered again
+    f.heard(T0, "acoustic", 3, encode_flood(7, 0, 1, b"m"))  # forgotten: delivered again
     assert f.take_events() == [("flood", 7, b"m")]
 
 
 def test_held_rebroadcasts_are_bounded_and_own_sends_come_first():
     f = Flooder(1, jitter_ms=1000, pending_cap=3, links=("acoustic", "radio"))
     for i in range(5):
-        f.heard(T0, "acoustic", 2, W.encode_flood(7, i, 0, b"r"))
+        f.heard(T0, "acoustic", 2, encode_flood(7, i, 0, b"r"))
     assert len(f._pending) == 3 and f.stats["dropped"] == 2 and len(f.take_events()) == 5
     ids = [f.send(T0, b"mine") for _ in range(3)]  # each takes a relay's place
     assert f.stats["dropped"] == 5 and len(f._pending) == 3
@@ -206,7 +206,7 @@ def test_own_floods_coming_back_and_bad_bytes():
     f.poll(T0)
     (_, _, p), = f.take()
     assert W.decode(p) == ("flood", 1, mid, 0, b"hi")
-    assert f.heard(T0, "acoustic", 2, W.encode_flood(1, mid, 1, b"hi"))
+    assert f.heard(T0, "acoustic", 2, encode_flood(1, mid, 1, b"hi"))
     assert f.take_events() == [] and f.take() == [] and f.stats["duplicates"] == 0
     for junk in (b"", b"\x00", b"\x00\x02\x01", b"\x00\xff\x01x", b"\x01\x02\x03" + bytes(MAX_DATA + 1)):
         assert f.heard(T0, "acoustic", 2, junk)
@@ -220,7 +220,7 @@ def test_own_floods_coming_back_and_bad_bytes():
 def test_ticks_wrap_and_next_ms():
     now = TICKS_MAX - 100
     f = Flooder(1, jitter_ms=1000, seed=3)
-    f.heard(now, "acoustic", 2, W.encode_flood(9, 4, 0, b"w"))
+    f.heard(now, "acoustic", 2, encode_flood(9, 4, 0, b"w"))
     wait = f.next_ms(now)
     assert 100 < wait <= 1000  # due after the wrap
     due = ticks_add(now, wait)
@@ -232,10 +232,10 @@ def test_ticks_wrap_and_next_ms():
     (link, to, p), = f.take()
     assert (link, to) == ("acoustic", 255) and W.decode(p) == ("flood", 9, 4, 1, b"w")
     # a copy heard while the rebroadcast waits, past the wrap, cancels it
-    f.heard(TICKS_MAX - 10, "acoustic", 2, W.encode_flood(9, 5, 0, b"v"))
-    f.heard(2, "acoustic", 3, W.encode_flood(9, 5, 2, b"v"))
+    f.heard(TICKS_MAX - 10, "acoustic", 2, encode_flood(9, 5, 0, b"v"))
+    f.heard(2, "acoustic", 3, encode_flood(9, 5, 2, b"v"))
     assert f.stats["suppressed"] == 0 and f.next_ms(2) is not None
-    f.heard(5, "acoustic", 4, W.encode_flood(9, 5, 1, b"v"))  # the third copy: max_copies
+    f.heard(5, "acoustic", 4, encode_flood(9, 5, 1, b"v"))  # the third copy: max_copies
     assert f.stats["suppressed"] == 1 and f.next_ms(5) is None
     f.poll(ticks_add(5, 2000))
     assert f.take() == []

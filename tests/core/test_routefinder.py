@@ -263,10 +263,10 @@ def test_a_cheaper_later_copy_of_a_request_moves_the_reverse_route():
 
 
 def test_a_flood_payload_is_not_taken_for_route_control():
-    from acomm.transport import routing as W
+    from acomm.transport.flood import encode_flood
 
     f, link = _node(5)
-    assert f.heard(0, link, 2, W.encode_flood(9, 1, 0, b"all up")) == [(9, b"all up")]
+    assert f.heard(0, link, 2, encode_flood(9, 1, 0, b"all up")) == [(9, b"all up")]
     assert f.stats["bad"] == 0 and not f.routes and not f._held
 
 

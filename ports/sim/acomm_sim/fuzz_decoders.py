@@ -296,6 +296,7 @@ def _auth_target():
 
 def _route_target():
     # route control and floods (acomm.transport.routing): what decodes encodes back to the same bytes
+    from acomm.transport import flood as F
     from acomm.transport import routing as W
 
     rng = Prng(136)
@@ -307,7 +308,7 @@ def _route_target():
                                      rng.below(70000), rng.below(1100000)))
         corpus.append(W.encode_error([(rng.below(255), rng.below(65535)) for _ in range(rng.range(1, 17))]))
     for _ in range(8):
-        corpus.append(W.encode_flood(rng.below(255), rng.below(256), rng.below(64),
+        corpus.append(F.encode_flood(rng.below(255), rng.below(256), rng.below(64),
                                      rng.bytes(rng.range(1, W.MAX_FLOOD_DATA))))
 
     def run(data, rng):
@@ -317,7 +318,7 @@ def _route_target():
         elif got[0] == "reply":
             again = W.encode_reply(*got[1:])
         elif got[0] == "flood":
-            again = W.encode_flood(*got[1:])
+            again = F.encode_flood(*got[1:])
         else:
             again = W.encode_error(got[1])
         if again != bytes(data):

@@ -9,6 +9,7 @@
 from acomm import frame as fr
 from acomm.compat import ticks_diff
 from acomm.transport import routing as W
+from acomm.transport.flood import encode_flood
 from acomm.transport import segment as sg
 from acomm.catalog import teleop
 from acomm.codec.compress import compress
@@ -212,7 +213,7 @@ class Forger:
             # them to its application and pass them on
             for k in range(2):
                 origin = ROUTE_ORIGINS[r.below(len(ROUTE_ORIGINS))]
-                payload = W.encode_flood(origin, r.below(256), r.below(3), b"all surface " + r.bytes(2))
+                payload = encode_flood(origin, r.below(256), r.below(3), b"all surface " + r.bytes(2))
                 self._control(at + 300 * k, ROUTE_HOPS[r.below(len(ROUTE_HOPS))], sc.BEACON_ALL, payload,
                               "route_flood", seal)
         else:
