@@ -85,7 +85,7 @@ class Channel(Medium):
         self.collisions = collisions
         self._now = now
         self._tracks = {}
-        self._near = {}  # src -> reach (_near_of)
+        self._near = {}  # src -> (stations in reach that stay put, their reach) (_near_of)
         self._near_curve = None  # the loss curve _near was worked out for
         self._grid = None  # (square east, square north) -> [addr] (_candidates)
         self._place = None  # addr -> its place in the stations' order (_near_of)
@@ -164,9 +164,10 @@ class Channel(Medium):
                     if d < lim:
                         found.append((place[dst], dst, d, int(interpolate(curve, d) * 0x100000000)))
             found.sort()
-            near = self._near[src] = found if tracks else self._reach(src, found)
+            # the stations that stay put, and their reach, which is the answer while no mover is near
+            near = self._near[src] = (found, self._reach(src, found))
         if not tracks:
-            return near
+            return near[1]
         place = self._places()
         moving = []
         for dst in tracks:
@@ -174,11 +175,11 @@ class Channel(Medium):
                 d = self.distance(src, dst)
                 if d < lim:
                     moving.append((place[dst], dst, d, int(interpolate(curve, d) * 0x100000000)))
-        if moving:
-            moving.extend(near)
-            moving.sort()
-            return self._reach(src, moving)
-        return self._reach(src, near)
+        if not moving:
+            return near[1]
+        moving.extend(near[0])
+        moving.sort()
+        return self._reach(src, moving)
 
     def _places(self):
         # addr -> its place in the stations' order
