@@ -35,15 +35,17 @@
 # its own sends not yet taken.
 
 from ..compat import const, ticks_add, ticks_diff
-from ..errors import AcommError, EncodeError
+from ..errors import AcommError, DecodeError, EncodeError
 from ..prng import Prng
 
 BROADCAST = const(255)
 # the flood message on the water (docs/wire-format.md, "Route control"), kept here and not with
 # routing's messages in acomm.transport.routing, which loads this module: an import back would be
-# a cycle. That module decodes floods too (its decode() names every kind), with the same limits.
+# a cycle. routing.decode() hands a flood's bytes to decode_flood, so both read it one way.
 #   kind 0 (top 2 bits) | hops (6 bits)   origin   id   data (1..MAX_DATA bytes)
-MAX_DATA = const(18)  # acomm.transport.routing.MAX_FLOOD_DATA: a sealed flood fits a SeaTrac packet
+# A flood's data fits a sealed elided frame on a 30-byte SeaTrac packet, the smallest acoustic MTU
+# acomm drives: 30 - 2 (link byte, flags byte) - 7 (counter and 4-byte tag) - 3 (its header) = 18.
+MAX_DATA = const(18)
 MAX_HOPS = const(63)  # acomm.transport.routing.MAX_HOPS
 
 
@@ -55,6 +57,14 @@ def encode_flood(origin, mid, hops, data):
         if not isinstance(v, int) or not 0 <= v <= top:
             raise EncodeError("%s %r outside 0..%d" % (what, v, top))
     return bytes((hops, origin, mid)) + bytes(data)  # kind 0: the top bits of hops stay clear
+
+
+def decode_flood(data):
+    """A flood message (kind 0) -> ("flood", origin, id, hops, data); DecodeError for a wrong
+    length or the broadcast id as its origin."""
+    if not 4 <= len(data) <= 3 + MAX_DATA or data[0] >> 6 or data[1] > 254:
+        raise DecodeError("flood of %d bytes or from a reserved id" % len(data))
+    return ("flood", data[1], data[2], data[0], bytes(data[3:]))
 
 
 class Flooder:
@@ -107,10 +117,11 @@ class Flooder:
         """A CONTROL payload from neighbour hop; True when it was a flood's (bad bytes counted, dropped)."""
         if payload and payload[0] >> 6 != 0:  # not a flood (kind 0)
             return False  # route discovery's
-        if not 4 <= len(payload) <= 3 + MAX_DATA or payload[1] > 254:  # what routing.decode refuses
+        try:
+            _, origin, mid, hops, data = decode_flood(payload)
+        except DecodeError:
             self.stats["bad"] += 1
             return True
-        hops, origin, mid, data = payload[0], payload[1], payload[2], bytes(payload[3:])
         if origin == self.node_id:
             return True  # our own, come back
         key = (origin, mid)

@@ -26,7 +26,7 @@
 #     kind|hops  dest  dest_seq(2)  origin  cost(2)  lifetime (4 s units, 1..255)
 #   error (to the sources that used the hop), 1 + 3 per destination (1..16):
 #     kind|n  (dest  dest_seq(2)) x n
-#   flood (acomm.transport.flood, rebroadcast by every node), 3 + 1..MAX_FLOOD_DATA bytes:
+#   flood (acomm.transport.flood, rebroadcast by every node), 3 + 1..18 bytes:
 #     kind|hops  origin  id  data
 #     id: the origin's flood counter mod 256; data is the application's;
 #     encoded by acomm.transport.flood (encode_flood), decoded by both
@@ -103,10 +103,6 @@ MAX_COST = const(0xFFFE)
 MAX_HOPS = const(63)
 MAX_ERRORS = const(16)
 LIFETIME_UNIT_MS = const(4000)
-# A flood's data fits a sealed elided frame on a 30-byte SeaTrac packet, the
-# smallest acoustic MTU acomm drives: 30 - 2 (link byte, flags byte) - 7
-# (counter and 4-byte tag) - 3 (its header) = 18 bytes.
-MAX_FLOOD_DATA = const(18)
 # the kinds on the water; private, so that they cost no slot in the module's dict
 _FLOOD = const(0)
 _REQUEST = const(1)
@@ -226,10 +222,11 @@ def decode(data):
                 raise DecodeError("route error with a reserved id or sequence number")
             lost.append((data[i], s))
         return ("error", lost)
-    # kind 0, a flood: data of 1..MAX_FLOOD_DATA bytes, never from the broadcast id
-    if not 4 <= len(data) <= 3 + MAX_FLOOD_DATA or data[1] > 254:
-        raise DecodeError("flood of %d bytes or from a reserved id" % len(data))
-    return ("flood", data[1], data[2], n, bytes(data[3:]))
+    # kind 0, a flood: the flood's module reads it (heard() hands floods to the flooder before
+    # this, so a node decodes here only route control, and loads that module only for floods)
+    from .flood import decode_flood
+
+    return decode_flood(data)
 
 
 def seq_newer(a, b):

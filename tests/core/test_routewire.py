@@ -78,11 +78,11 @@ def test_flood_round_trip_and_size():
     b = encode_flood(3, 200, 5, b"all up")
     assert b == bytes((0x05, 3, 200)) + b"all up"
     assert W.decode(b) == ("flood", 3, 200, 5, b"all up")
-    full = encode_flood(254, 255, 63, bytearray(range(W.MAX_FLOOD_DATA)))
-    assert len(full) == 3 + W.MAX_FLOOD_DATA == 21  # a sealed elided frame of 30 bytes
-    # the flood's own module encodes it, with the limits routing's decode() holds it to
-    assert (F.MAX_DATA, F.MAX_HOPS) == (W.MAX_FLOOD_DATA, W.MAX_HOPS)
-    assert W.decode(full) == ("flood", 254, 255, 63, bytes(range(W.MAX_FLOOD_DATA)))
+    full = encode_flood(254, 255, 63, bytearray(range(F.MAX_DATA)))
+    assert len(full) == 3 + F.MAX_DATA == 21  # a sealed elided frame of 30 bytes
+    # the flood's own module encodes and decodes it; routing's decode() hands floods to it
+    assert F.MAX_HOPS == W.MAX_HOPS and F.decode_flood(full) == W.decode(full)
+    assert W.decode(full) == ("flood", 254, 255, 63, bytes(range(F.MAX_DATA)))
     assert W.decode(encode_flood(0, 0, 0, memoryview(b"x"))) == ("flood", 0, 0, 0, b"x")
     # the other kinds decode as before
     assert W.decode(W.encode_error([(1, 2)]))[0] == "error"
@@ -95,9 +95,9 @@ def test_flood_encoder_and_decoder_refuse_what_does_not_fit():
     assert raises(EncodeError, encode_flood, 3, 1, 64, b"x")
     assert raises(EncodeError, encode_flood, 3, 1, -1, b"x")
     assert raises(EncodeError, encode_flood, 3, 1, 0, b"")
-    assert raises(EncodeError, encode_flood, 3, 1, 0, bytes(W.MAX_FLOOD_DATA + 1))
+    assert raises(EncodeError, encode_flood, 3, 1, 0, bytes(F.MAX_DATA + 1))
     assert raises(EncodeError, encode_flood, 3, 1, 0, "text")
     assert raises(EncodeError, encode_flood, 3.0, 1, 0, b"x")
     for b in (b"\x00", b"\x00\x03", b"\x05\x03\x01", b"\x00\xff\x01x",
-              b"\x00\x03\x01" + bytes(W.MAX_FLOOD_DATA + 1)):
+              b"\x00\x03\x01" + bytes(F.MAX_DATA + 1)):
         assert raises(DecodeError, W.decode, b), b

@@ -309,7 +309,7 @@ def _route_target():
         corpus.append(W.encode_error([(rng.below(255), rng.below(65535)) for _ in range(rng.range(1, 17))]))
     for _ in range(8):
         corpus.append(F.encode_flood(rng.below(255), rng.below(256), rng.below(64),
-                                     rng.bytes(rng.range(1, W.MAX_FLOOD_DATA))))
+                                     rng.bytes(rng.range(1, F.MAX_DATA))))
 
     def run(data, rng):
         got = W.decode(data)
