@@ -19,15 +19,18 @@ WORKLOADS = os.path.join(PORT, "bench", "workloads")
 
 # group -> the groups and packages it may import besides the core and itself
 MAY_IMPORT = {
-    "library": set(),
+    # shore: a node's link through the Iridium gateway's services, no modem
+    # (open_node's iridium=); the library loads it only when asked for one
+    "library": {"shore"},
+    "shore": {"library"},
     "console": {"library", "acomm_web"},
-    "emulate": {"library", "acomm_sim"},
+    "emulate": {"library", "shore", "acomm_sim"},
     "bridges": {"library", "acomm_sim"},
     "demo": {"library", "acomm_sim", "acomm_web"},
     # acomm_boards: the boards shipped with acomm (package data)
     "board": {"library", "console", "acomm_mp", "acomm_web", "acomm_boards"},
-    "bench": {"library", "board", "demo", "emulate", "bridges", "acomm_sim", "acomm_web", "acomm_mp"},
-    "cli": {"library", "console", "emulate", "bridges", "demo", "board", "bench", "acomm_sim", "acomm_web", "acomm_mp",
+    "bench": {"library", "shore", "board", "demo", "emulate", "bridges", "acomm_sim", "acomm_web", "acomm_mp"},
+    "cli": {"library", "shore", "console", "emulate", "bridges", "demo", "board", "bench", "acomm_sim", "acomm_web", "acomm_mp",
             "acomm_boards"},
 }
 # the packages beside the port whose imports are ruled (others, stdlib and

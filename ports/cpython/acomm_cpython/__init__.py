@@ -6,6 +6,7 @@
 #                the command lines' shared helpers), the asyncio node   core
 #   console/     the console of acomm node and acomm run                library, acomm_web
 #   emulate/     the emulators' ptys and TCP, captures, replay           library, acomm_sim
+#   shore/       a shore link through the Iridium gateway, no modem     library
 #   bridges/     gateways to other protocols (IMC)                       library, acomm_sim
 #   demo/        the demo mission and sweeps on the simulated ocean      library, acomm_sim, acomm_web
 #   board/       a board's files, flash, acomm run, emulated boards      library, console, acomm_mp, acomm_web

@@ -204,27 +204,33 @@ def add_known(node, pairs):
         node.names.add(k, int(v))
 
 
-def load_key(path):
-    """The network key in a file -> its bytes; AcommError naming the file and what is wrong.
+def read_private(path, what="key file"):
+    """The text of a file that only its owner may read or write (stripped); AcommError otherwise.
 
-    The key itself never appears in a message. As ssh does with a private
-    key, a file that anyone but its owner may read or write is refused: the
-    key may already be out."""
+    As ssh does with a private key, a file that anyone but its owner may
+    read or write is refused: the secret may already be out."""
     import os
 
     try:
         mode = os.stat(path).st_mode
     except OSError as e:
-        raise AcommError("key file %s: %s" % (path, e.strerror or e))
+        raise AcommError("%s %s: %s" % (what, path, e.strerror or e))
     if mode & 0o077:
-        raise AcommError("key file %s: permissions %04o are too open: others than its owner can use it, so the key "
-                         "may be known already; make it the owner's only (chmod 600 %s), or take a new key"
-                         % (path, mode & 0o7777, path))
+        raise AcommError("%s %s: permissions %04o are too open: others than its owner can use it, so the secret "
+                         "may be known already; make it the owner's only (chmod 600 %s), or take a new one"
+                         % (what, path, mode & 0o7777, path))
     try:
         with open(path) as f:
-            text = f.read().strip()
+            return f.read().strip()
     except OSError as e:
-        raise AcommError("key file %s: %s" % (path, e.strerror or e))
+        raise AcommError("%s %s: %s" % (what, path, e.strerror or e))
+
+
+def load_key(path):
+    """The network key in a file -> its bytes; AcommError naming the file and what is wrong.
+
+    The key itself never appears in a message; the file must be its owner's only (read_private)."""
+    text = read_private(path)
     try:
         key = bytes.fromhex(text)
     except ValueError:

@@ -19,7 +19,9 @@ class open_node:
 
     modems: --modem texts ("seatrac:/dev/ttyUSB0", "evologics:tcp://HOST:9200", ...); udp:
     "[HOST:]PORT" of a UDP link (0: any port); tcp_listen / tcp_connect: a TCP server or client
-    link; known: other nodes' names -> ids; key_file: the network key (hex in a file only its owner
+    link; iridium: --iridium texts of shore links through the Iridium gateway, no modem
+    ("directip:10800,mt=HOST:PORT", "rockblock:8080,key=rock7.pem,...", docs/drivers-iridium.md),
+    each a link named "satellite" (then "satellite2", ...); known: other nodes' names -> ids; key_file: the network key (hex in a file only its owner
     reads); store: a folder for the transport's persistent store (None: in RAM); transport=False:
     none. udp_peers: static UDP peers, id -> "HOST:PORT"; multicast=False: the UDP link announces
     itself neither by multicast nor by broadcast (static and learnt peers only).
@@ -34,12 +36,12 @@ class open_node:
                  store: Optional[str] = None, transport: bool = True,
                  driver_options: Optional[Mapping[str, Any]] = None, link_options: Optional[Mapping[str, Any]] = None,
                  startup_timeout_s: float = 15.0, udp_peers: Optional[Mapping[int, str]] = None,
-                 multicast: bool = True, guard: Optional[Any] = None) -> None:
+                 multicast: bool = True, guard: Optional[Any] = None, iridium: Sequence[str] = ()) -> None:
         self._args: Dict[str, Any] = dict(name=name, node_id=node_id, modems=list(modems), udp=udp, tcp_listen=tcp_listen,
                           tcp_connect=tcp_connect, known=dict(known or {}), key_file=key_file, store=store,
                           transport=transport, driver_options=dict(driver_options or {}),
                           link_options=dict(link_options or {}), udp_peers=dict(udp_peers or {}),
-                          multicast=multicast, guard=guard)
+                          multicast=multicast, guard=guard, iridium=list(iridium))
         self._timeout = startup_timeout_s
         self._node: Optional[AsyncNode] = None
 
@@ -64,7 +66,7 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
                store: Optional[str] = None, transport: bool = True,
                driver_options: Optional[Mapping[str, Any]] = None, link_options: Optional[Mapping[str, Any]] = None,
                udp_peers: Optional[Mapping[int, str]] = None, multicast: bool = True,
-               guard: Optional[Any] = None) -> AsyncNode:
+               guard: Optional[Any] = None, iridium: Sequence[str] = ()) -> AsyncNode:
     """The AsyncNode open_node starts, not yet started (links opened, nothing stepped)."""
     from .modems import add_modem_link, hostport, load_key
 
@@ -87,6 +89,13 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
             closers.append(stream)
             ports[lname] = stream
             watches.append((lname, watch))
+        for i, spec in enumerate(iridium):
+            from .shore.spec import add_shore_link
+
+            lname = "satellite" if i == 0 else "satellite%d" % (i + 1)
+            _, port = add_shore_link(core, spec, lname, **lopts)
+            closers.append(port)
+            ports[lname] = port
         if udp is not None:
             from .udp import DEFAULT_GROUP, udp_link
 

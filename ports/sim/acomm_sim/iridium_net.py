@@ -9,7 +9,9 @@
 #   3. else every other modem on the network (a fleet whose vendor
 #      application forwards each message to all its other members).
 # Every MO message is also kept in `mo_log` (bounded), which is what a shore
-# application would read. The message arrives in the destination's MT
+# application would read, and given to each of `shores`, fn(now, imei,
+# serial, momsn, mtmsn, data): the gateway's delivery to customers' servers
+# (DirectIP, the RockBLOCK POST; acomm_cpython.emulate.shoregw). The message arrives in the destination's MT
 # queue at the gateway after a latency of 5 s for a short message up to
 # 20 s for the longest (ref 5.4); the gateway then sends a ring alert, and
 # one more after ring_repeat_ms if no session came (ref 5.2), then waits
@@ -36,6 +38,7 @@ class IridiumNetwork:
         self.routes = {}  # IMEI -> [IMEI, ...]
         self.mt = {}  # IMEI -> [bytes, ...] waiting at the gateway
         self.mo_log = []  # (ticks, IMEI, bytes), newest last
+        self.shores = []  # fn(now, imei, serial, momsn, mtmsn, data) for each MO message
         self.dropped = 0
         self._flight = []  # [arrival, IMEI, bytes]
         self._rings = []  # [when, IMEI]: the repeated ring alert
@@ -56,6 +59,9 @@ class IridiumNetwork:
         self.mo_log.append((now, emu.imei, data))
         if len(self.mo_log) > _LOG_MAX:
             self.mo_log.pop(0)
+        for fn in self.shores:
+            # the session's MOMSN: the modem counts it up after this call
+            fn(now, emu.imei, emu.serial, (emu.momsn + 1) & 0xFFFF, emu.mtmsn, data)
         dst = None
         if len(data) >= 9 and data[:2] == b"RB":
             for m in self.modems.values():

@@ -7,7 +7,9 @@ import signal
 import sys
 
 from ..emulate.host import MODEMS, EmulatorHost, parse_peer
-from ..modems import parse_options
+from acomm.errors import AcommError
+
+from ..modems import hostport, parse_options
 
 
 def add_arguments(p):
@@ -29,6 +31,17 @@ def add_arguments(p):
                                                  "time (JSON lines; for acomm replay)")
     p.add_argument("--mt", action="append", default=[], metavar="HEX",
                    help="iridium, gsm: a message (hex bytes) waiting for the modem at the gateway (repeatable)")
+    g = p.add_argument_group("iridium: the gateway's shore services")
+    g.add_argument("--directip", metavar="HOST:PORT", help="deliver each MO message by DirectIP to the server there")
+    g.add_argument("--directip-mt", metavar="[HOST:]PORT", help="take MT messages by DirectIP here (0: any port)")
+    g.add_argument("--rockblock-post", metavar="URL", help="POST each MO message there, as the RockBLOCK service does")
+    g.add_argument("--rockblock-mt", metavar="[HOST:]PORT", help="serve the RockBLOCK MT API here (0: any port)")
+    g.add_argument("--rockblock-credentials", metavar="FILE",
+                   help="username= and password= the MT API takes (a file only its owner reads; default: any)")
+    g.add_argument("--rockblock-public-key", metavar="PATH",
+                   help="write the public half of the emulator's TEST signing key here, for the shore under test")
+    g.add_argument("--shore-retry", type=float, default=60.0, metavar="S",
+                   help="emulated seconds between deliveries to a shore server that is down (default 60)")
 
 
 def main(args):
@@ -41,6 +54,10 @@ def main(args):
         incoming = [bytes.fromhex(h) for h in args.mt]
     except ValueError:
         print("--mt wants hex bytes", file=sys.stderr)
+        return 2
+    shore = (args.directip, args.directip_mt, args.rockblock_post, args.rockblock_mt, args.rockblock_public_key)
+    if any(x is not None for x in shore) and args.modem != "iridium":
+        print("--directip and --rockblock-* are for iridium", file=sys.stderr)
         return 2
     if incoming and args.modem not in ("iridium", "gsm"):
         print("--mt is for iridium and gsm", file=sys.stderr)
@@ -78,6 +95,13 @@ def main(args):
 
     signal.signal(signal.SIGUSR1, lambda *_: noise(True))
     signal.signal(signal.SIGUSR2, lambda *_: noise(False))
+    try:
+        for line in _shore_services(args, host):
+            print(line, flush=True)
+    except (AcommError, OSError, ValueError) as e:
+        host.close()
+        print("cannot start the gateway's shore services: %s" % e, file=sys.stderr)
+        return 1
     for st in host.stations:
         where = "%s -> %s" % (st.pty.link, st.pty.device) if st.pty and st.pty.link else "headless"
         if st.tcp:
@@ -88,3 +112,36 @@ def main(args):
     finally:
         host.close()
     return 0
+
+
+def _shore_services(args, host):
+    # the gateway's DirectIP and RockBLOCK services asked for -> lines to print
+    lines = []
+    retry_ms = int(args.shore_retry * 1000)
+    if args.directip or args.directip_mt:
+        from ..emulate.directipgw import DirectIpGateway
+
+        mo_to = hostport(args.directip, "127.0.0.1") if args.directip else None
+        mt = hostport(args.directip_mt, "127.0.0.1") if args.directip_mt else None
+        gw = host.add_service(lambda net, now: DirectIpGateway(net, mo_to, mt, now, retry_ms))
+        if mo_to:
+            lines.append("gateway: MO by DirectIP to %s:%d" % mo_to)
+        if mt:
+            lines.append("gateway: MT DirectIP on %s:%d" % gw.mt_address)
+    if args.rockblock_post or args.rockblock_mt or args.rockblock_public_key:
+        from ..emulate.rockblockgw import RockblockGateway, public_test_pem
+        from ..shore.rockblock import read_credentials
+
+        if args.rockblock_public_key:
+            with open(args.rockblock_public_key, "w") as f:
+                f.write(public_test_pem())
+            lines.append("gateway: the TEST key's public half in %s" % args.rockblock_public_key)
+        creds = read_credentials(args.rockblock_credentials) if args.rockblock_credentials else None
+        mt = hostport(args.rockblock_mt, "127.0.0.1") if args.rockblock_mt else None
+        if args.rockblock_post or mt:
+            gw = host.add_service(lambda net, now: RockblockGateway(net, args.rockblock_post, mt, creds, now, retry_ms))
+            if args.rockblock_post:
+                lines.append("gateway: MO by RockBLOCK POST to %s" % args.rockblock_post)
+            if mt:
+                lines.append("gateway: RockBLOCK MT API on http://%s:%d/rockblock/MT" % gw.mt_address)
+    return lines

@@ -2,6 +2,8 @@
 # links: serial and Ethernet modems (--modem KIND:DEVICE, acomm_cpython.modems),
 # UDP and TCP. It runs the same drivers, link layer and store-and-forward
 # transport as the boards; --store DIR keeps the transport's packets on disk.
+# --iridium directip:... / rockblock:... makes a shore node without a modem:
+# its buoys' Iridium messages come from the gateway (acomm_cpython.shore).
 #
 # On standard input it takes console commands (acomm_cpython.console.console: send,
 # file, range, cancel, status, help) and prints one line per event, or JSON
@@ -43,6 +45,10 @@ def add_arguments(p):
     p.add_argument("--modem", action="append", default=[], metavar="KIND:DEVICE[:BAUD]",
                    help="a modem link: KIND one of %s; DEVICE a serial port, tcp://HOST:PORT, "
                         "socket://HOST:PORT or rfc2217://HOST:PORT (repeat for more links)" % ", ".join(sorted(DRIVERS)))
+    p.add_argument("--iridium", action="append", default=[], metavar="SERVICE:[HOST:]PORT[,KEY=VALUE...]",
+                   help="a shore link to buoys through the Iridium gateway, no modem: directip:PORT[,mt=HOST:PORT]"
+                        "[,imei=IMEI][,gateway=IP] or rockblock:PORT,key=PEM[,mt=URL,credentials=FILE][,imei=IMEI] "
+                        "(docs/drivers-iridium.md)")
     p.add_argument("--driver-option", action="append", default=[], metavar="KEY=VALUE",
                    help="an option of the modems' drivers (docs/drivers.md), e.g. cmd_timeout_ms=3000")
     p.add_argument("--advert-period", type=float, metavar="S",
@@ -95,6 +101,16 @@ def _ip_links(args, node, out):
         link, port = tcp_client_link(node, host, p, name, advert_period_ms=period_ms)
         ports.append(port)
         out.emit({"event": "listening", "link": name, "text": "tcp connecting to %s:%d" % (host, p)})
+    for i, spec in enumerate(args.iridium):
+        from ..shore.spec import add_shore_link
+
+        opts = {}
+        if args.advert_period is not None:
+            opts["advert_period_ms"] = int(args.advert_period * 1000)
+        name = "satellite" if i == 0 else "satellite%d" % (i + 1)
+        link, port = add_shore_link(node, spec, name, **opts)
+        ports.append(port)
+        out.emit({"event": "listening", "link": name, "text": "%s listening on %s:%d" % ((spec.split(":")[0],) + tuple(port.address[:2]))})
     return ports
 
 
@@ -133,8 +149,8 @@ def main(args):
     from ..console.console import Console
     from ..console.eventlines import Output
 
-    if args.udp is None and args.tcp_listen is None and args.tcp_connect is None and not args.modem:
-        print("acomm node: give --modem, --udp, --tcp-listen and/or --tcp-connect", file=sys.stderr)
+    if args.udp is None and args.tcp_listen is None and args.tcp_connect is None and not args.modem and not args.iridium:
+        print("acomm node: give --modem, --iridium, --udp, --tcp-listen and/or --tcp-connect", file=sys.stderr)
         return 2
     try:
         for kv in args.send + args.known + args.driver_option:
@@ -143,6 +159,10 @@ def main(args):
 
         for spec in args.modem:
             parse_spec(spec)
+        from ..shore.spec import parse_spec as parse_shore
+
+        for spec in args.iridium:
+            parse_shore(spec)
         key = load_key(args.key_file) if args.key_file is not None else None
         node = Node(args.name, args.id)
         add_known(node, args.known)

@@ -15,6 +15,8 @@
 # time (airtimes and propagation shrink; useful for tests). --log FILE
 # writes every byte that crosses the first modem's port, each way, with its
 # real time in ms (acomm_cpython.emulate.capture), for `acomm replay`.
+# add_service() adds one of the Iridium gateway's shore services
+# (directipgw, rockblockgw), pumped on the emulated clock at every step.
 
 import select
 import socket
@@ -124,6 +126,7 @@ class EmulatorHost:
         self._t0 = time.monotonic()
         self.medium = Medium(default_distance=distance, loss=loss, seed=seed)
         self.stations = []
+        self.services = []
         opts = dict(options or {})
         now = self.now()
         try:
@@ -140,6 +143,15 @@ class EmulatorHost:
         except BaseException:
             self.close()
             raise
+
+    def add_service(self, make):
+        """make(network, now) -> a service with pump(now) and close(), on the Iridium gateway of
+        this host's modems; -> the service."""
+        from acomm_sim.iridium_net import network_of
+
+        svc = make(network_of(self.medium), self.now())
+        self.services.append(svc)
+        return svc
 
     def _log(self, st, to, data):
         if self.log is not None and st is self.stations[0]:
@@ -182,6 +194,8 @@ class EmulatorHost:
                             st.emu.feed(now, data)
         for st in self.stations:
             st.emu.poll(now)
+        for svc in self.services:
+            svc.pump(now)
         self.medium.poll(now)
         for st in self.stations:
             out = st.emu.take_output()
@@ -200,6 +214,9 @@ class EmulatorHost:
             self.step()
 
     def close(self):
+        for svc in self.services:
+            svc.close()
+        self.services = []
         for st in self.stations:
             if st.pty:
                 st.pty.close()
