@@ -10,7 +10,8 @@
 # foreign IMEI) is counted in `refused` by its reason and answered with an
 # MO confirmation of 0 where the connection still stands; a message taken is
 # delivered to the driver and then confirmed with 1, so the gateway may
-# forget it only once it is ours. At most max_conns connections at once,
+# forget it only once it is ours. A message sent again (same IMEI and
+# MOMSN: its confirmation was lost) is confirmed again, not delivered twice. At most max_conns connections at once,
 # each reading at most one message's bytes.
 
 import socket
@@ -18,6 +19,7 @@ import socket
 from acomm.compat import ticks_diff
 
 from . import directip as dip
+from .seen import Replays
 from .worker import Worker, pump_mt
 
 _CHUNK = 4096
@@ -39,7 +41,8 @@ class DirectIpShorePort:
         self.stall_ms = stall_ms
         self.mt_timeout_s = mt_timeout_s
         self.refused = {}  # reason -> count
-        self.stats = {"mo_taken": 0, "mt_queued": 0, "mt_refused": 0}
+        self.stats = {"mo_taken": 0, "mo_again": 0, "mt_queued": 0, "mt_refused": 0}
+        self.seen = Replays(4096)
         self._conns = {}  # socket -> [Reader, ticks of the last byte, peer]
         self._client_id = 0
         s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
@@ -108,10 +111,15 @@ class DirectIpShorePort:
         except dip.DirectIpError as e:
             self._refuse(sock, e.reason)
             return
-        if not self.driver.deliver(now, mo["imei"], mo["payload"]):
+        key = (mo["imei"], mo["momsn"])
+        if self.seen.seen(key):
+            self.stats["mo_again"] += 1
+        elif not self.driver.deliver(now, mo["imei"], mo["payload"]):
             self._refuse(sock, "foreign IMEI")
             return
-        self.stats["mo_taken"] += 1
+        else:
+            self.seen.add(key)
+            self.stats["mo_taken"] += 1
         self._close(sock, dip.encode_mo_confirmation(True))
 
     def _refuse(self, sock, reason, answer=True):
@@ -123,6 +131,11 @@ class DirectIpShorePort:
         try:
             if reply:
                 sock.send(reply)  # a few bytes: the socket's buffer takes them
+            # bytes left unread would make the close a reset, which can
+            # overtake the answer: read what has come (bounded)
+            for _ in range(4):
+                if not sock.recv(_CHUNK):
+                    break
         except OSError:
             pass
         sock.close()

@@ -19,6 +19,7 @@ import time
 from urllib.parse import parse_qs, urlencode
 
 from . import jwt_rs256
+from .seen import Replays  # noqa: F401 (the table check_mo reads)
 
 MT_URL = "https://rockblock.rock7.com/rockblock/MT"
 MO_FIELDS = ("imei", "serial", "momsn", "transmit_time", "iridium_latitude", "iridium_longitude", "iridium_cep",
@@ -65,24 +66,6 @@ def _hex(s, reason):
         return bytes.fromhex(s)
     except ValueError:
         raise RockblockError(reason) from None
-
-
-class Replays:
-    """The (imei, momsn) pairs taken, at most capacity; when full the oldest is forgotten
-    (a POST older than max_age_s is refused as stale anyway, so capacity must exceed what
-    max_age_s can bring)."""
-
-    def __init__(self, capacity=4096):
-        self.capacity = capacity
-        self._seen = {}  # insertion order: oldest first
-
-    def seen(self, key):
-        return key in self._seen
-
-    def add(self, key):
-        self._seen[key] = True
-        if len(self._seen) > self.capacity:
-            del self._seen[next(iter(self._seen))]
 
 
 def check_mo(fields, key, replays, now_s=None, max_age_s=300, mo_max=340):

@@ -26,6 +26,11 @@ class _Handler(http.server.BaseHTTPRequestHandler):
     def log_message(self, *args):
         pass  # counted in `refused`, not printed
 
+    def setup(self):
+        # a connection that stalls mid-request ends after the port's stall_s
+        self.timeout = self.server.port.stall_s
+        http.server.BaseHTTPRequestHandler.setup(self)
+
     def do_POST(self):
         port = self.server.port
         try:
@@ -65,6 +70,7 @@ class RockblockShorePort:
         self.mt_url = mt_url
         self.credentials = credentials
         self.max_age_s = max_age_s
+        self.stall_s = stall_s
         self.replays = rb.Replays(replay_capacity)
         self.refused = {}  # reason -> count
         self.stats = {"mo_taken": 0, "mt_queued": 0, "mt_refused": 0}
@@ -75,8 +81,6 @@ class RockblockShorePort:
         self.server = http.server.ThreadingHTTPServer(listen, _Handler)
         self.server.daemon_threads = True
         self.server.port = self
-        self.server.timeout = stall_s
-        _Handler.timeout = stall_s  # a connection that stalls mid-request ends after this
         self._thread = threading.Thread(target=self.server.serve_forever, kwargs={"poll_interval": 0.2}, daemon=True)
         self._thread.start()
         self.worker = Worker(self._submit_mt)
