@@ -293,3 +293,29 @@ def test_the_gateways_mt_services_answer_with_their_documented_codes():
         th.join()
         dgw.close()
         rgw.close()
+
+
+def test_open_node_takes_the_same_iridium_texts():
+    import asyncio
+
+    from acomm import frame as fr
+    from acomm_cpython.aio import open_node
+
+    frame = fr.encode_raw(fr.Frame(fr.DATA, 1, 3, 0, b"hello shore"))
+
+    def deliver(addr):
+        with socket.create_connection(addr, timeout=5) as s:
+            s.sendall(dip.encode_mo(1, IMEI, 0, 1, 0, 0, frame))
+            return s.recv(64)
+
+    async def main():
+        async with open_node("shore", 3, iridium=["directip:127.0.0.1:0"], known={"buoy": 1}) as n:
+            assert n.core.links["satellite"].medium == "satellite"
+            answer = await asyncio.get_running_loop().run_in_executor(None, deliver, n.ports["satellite"].address)
+            for _ in range(100):
+                if n.core.links["satellite"].driver.stats["mo_delivered"]:
+                    break
+                await asyncio.sleep(0.01)
+            return answer, n.core.links["satellite"].driver.imei
+
+    assert asyncio.run(asyncio.wait_for(main(), 20)) == (TAKEN, IMEI)

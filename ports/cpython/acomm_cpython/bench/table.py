@@ -54,6 +54,9 @@ BENCHES = {
     # multi-hop routing in the simulated ocean, learned against flooding and an
     # oracle, 4 scenarios x 5 seeds: many minutes of wall time, so not in `all`
     "routing": "routing_workload",
+    # a buoy's packets to a shore server with no modem and commands back,
+    # through the emulated Iridium gateway's DirectIP and RockBLOCK services
+    "surface": "surface_workload",
 }
 NOT_IN_ALL = ("compare", "soak", "attack", "sweep", "board", "routing")
 

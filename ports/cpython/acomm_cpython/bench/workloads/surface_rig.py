@@ -153,3 +153,35 @@ class SurfaceRig:
             except OSError:
                 pass
         self._closers = []
+
+
+def forge_posts(addr, imei, n):
+    """n forged MO POSTs to a RockBLOCK shore at addr, as an attacker without Rock7's key would
+    send them: a signed POST's data changed, a signature altered, no signature, in turn.
+    -> how many were refused (HTTP 401)."""
+    import http.client
+
+    from ...emulate.rock7_testkey import PRIVATE_PEM
+    from ...shore import jwt_rs256
+    from ...shore import rockblock as rb
+
+    key = jwt_rs256.private_key(PRIVATE_PEM)
+    refused = 0
+    for i in range(n):
+        f = {"imei": imei, "serial": "0000001", "momsn": str(60000 + i), "transmit_time": "26-11-27 10:00:00",
+             "iridium_latitude": "41.1", "iridium_longitude": "-8.6", "iridium_cep": "4", "data": "0a0b"}
+        body = rb.form(rb.mo_form(f, key))
+        if i % 3 == 0:
+            body["data"] = "ff00"  # a command slipped into a signed POST
+        elif i % 3 == 1:
+            body["JWT"] = body["JWT"][:-8] + ("A" * 8 if body["JWT"][-8:] != "A" * 8 else "B" * 8)
+        else:
+            del body["JWT"]
+        c = http.client.HTTPConnection(addr[0], addr[1], timeout=10)
+        try:
+            c.request("POST", "/mo", "&".join("%s=%s" % kv for kv in body.items()),
+                      {"Content-Type": "application/x-www-form-urlencoded"})
+            refused += c.getresponse().status == 401
+        finally:
+            c.close()
+    return refused
