@@ -18,6 +18,19 @@ from acomm_cpython.shore import rockblock as rb
 IMEI = "300234010000001"
 PRIV = jwt.private_key(PRIVATE_PEM)
 PUB = jwt.public_key(public_test_pem())
+# the same public half as SubjectPublicKeyInfo, the form keys are usually published in
+# (`openssl rsa -pubout` of the emulator's TEST key)
+SPKI = """\
+-----BEGIN PUBLIC KEY-----
+MIIBIjANBgkqhkiG9w0BAQEFAAOCAQ8AMIIBCgKCAQEAms/oCg5Unv9DhAlxaJWH
+VyFYSaK0+e/U679ecau2SZ1gKGAcImwJnmmQa3OkwxK54LcxDEcJ8Z96+mOkcD2R
+PhLxKonqZokFZ0hCQRIV+3GcKE/g7y/vaZmZcwXN6pZVUksUJ9ICSQFWckY6NEzQ
+wK8bHWSR5LbCAHIh+NpfqY0I86dsECFDM/vLKfpP3IZ/MvEJecI+AG2rIftiIU/F
+n4vYS0YE3bMKx/6NtEKJOb+47S75Ck5I0bfxbDqWQFt/9F8X5xERl2Th/zX8Jz//
+7cP6CbfXc8fo5pBmciDetLPvgqZ9tY5uxcV++dbheKpTqE8zye5EkbbCK+cNqbQ4
+/QIDAQAB
+-----END PUBLIC KEY-----
+"""
 
 
 def _read(data, allowed=dip.MO_IES, chunk=1):
@@ -87,6 +100,7 @@ def test_rs256_tokens_verify_and_tampered_or_unsigned_ones_do_not():
         with pytest.raises(jwt.JwtError) as e:
             jwt.decode(bad, PUB)
         assert e.value.reason == reason, bad
+    assert jwt.public_key(SPKI) == PUB
     with pytest.raises(jwt.JwtError):
         jwt.public_key("-----BEGIN PUBLIC KEY-----\nAAAA\n-----END PUBLIC KEY-----")
 

@@ -20,6 +20,7 @@ import threading
 import socketserver
 
 from ..shore import directip as dip
+from ..shore.directip_port import exchange
 from .shoregw import Service, WallClock, queue_status
 
 # where the emulated satellites put every buoy (the MO location IE): off Porto
@@ -96,23 +97,13 @@ class DirectIpGateway(Service):
     def _deliver(self, msg):
         # on the outbox's thread: one MO message, one connection
         try:
-            s = socket.create_connection(self.mo_to, timeout=5)
+            ies = exchange(self.mo_to, msg, dip.MO_CONFIRMATION, 5)
         except OSError as e:
             return "retry: %s" % (e.strerror or e)
-        try:
-            s.sendall(msg)
-            r = dip.Reader((dip.MO_CONFIRMATION,), 16)
-            while True:
-                chunk = s.recv(64)
-                if not chunk:
-                    return "retry: closed without a confirmation"
-                ies = r.feed(chunk)
-                if ies is not None:
-                    break
-        except (OSError, dip.DirectIpError) as e:
+        except dip.DirectIpError as e:
             return "retry: %s" % e
-        finally:
-            s.close()
+        if ies is None:
+            return "retry: closed without a confirmation"
         return None if ies[dip.MO_CONFIRMATION] == b"\x01" else "refused: MO confirmation 0"
 
     def queue(self, now, mt):

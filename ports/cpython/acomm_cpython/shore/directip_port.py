@@ -146,16 +146,9 @@ class DirectIpShorePort:
             return "no MT service configured (mt=HOST:PORT)"
         self._client_id = (self._client_id + 1) & 0xFFFFFFFF
         cid = self._client_id
-        with socket.create_connection(self.mt, timeout=self.mt_timeout_s) as s:
-            s.sendall(dip.encode_mt(cid, imei, data))
-            r = dip.Reader((dip.MT_CONFIRMATION,), 64)
-            while True:
-                chunk = s.recv(256)
-                if not chunk:
-                    return "the gateway closed without a confirmation"
-                ies = r.feed(chunk)
-                if ies is not None:
-                    break
+        ies = exchange(self.mt, dip.encode_mt(cid, imei, data), dip.MT_CONFIRMATION, self.mt_timeout_s)
+        if ies is None:
+            return "the gateway closed without a confirmation"
         got_cid, _, _, status = dip.decode_mt_confirmation(ies)
         if got_cid != cid:
             return "a confirmation for another message"
@@ -168,3 +161,19 @@ class DirectIpShorePort:
             self._close(sock, b"")
         self.listener.close()
         self.worker.close()
+
+
+def exchange(addr, msg, answer_iei, timeout_s):
+    """One DirectIP message to addr on a connection of its own (blocking) -> the IEs of the answer
+    (an MO or MT confirmation, answer_iei), or None when the peer closed without one.
+    OSError for the connection, DirectIpError for an answer that does not parse."""
+    with socket.create_connection(addr, timeout=timeout_s) as s:
+        s.sendall(msg)
+        r = dip.Reader((answer_iei,), 64)
+        while True:
+            chunk = s.recv(256)
+            if not chunk:
+                return None
+            ies = r.feed(chunk)
+            if ies is not None:
+                return ies

@@ -43,17 +43,21 @@ def _tlv(b, i):
     return tag, i, i + n
 
 
+def _children(b, s, e):
+    # the elements (tag, start, end) one after another in b[s:e]
+    out = []
+    while s < e:
+        out.append(_tlv(b, s))
+        s = out[-1][2]
+    return out
+
+
 def _seq(b, s, e, tag=0x30):
-    # the children (tag, start, end) of the one element that fills b[s:e]
+    # the children of the one element that fills b[s:e]
     t, cs, ce = _tlv(b, s)
     if t != tag or ce != e:
         raise JwtError("bad key")
-    out = []
-    while cs < ce:
-        item = _tlv(b, cs)
-        out.append(item)
-        cs = item[2]
-    return out
+    return _children(b, cs, ce)
 
 
 def _ints(b, items):
@@ -86,11 +90,7 @@ def public_key(pem):
         spki = _seq(der, 0, len(der))
         if len(spki) != 2 or spki[0][0] != 0x30 or spki[1][0] != 0x03:
             raise JwtError("not an RSA key")
-        alg = []
-        s = spki[0][1]
-        while s < spki[0][2]:
-            alg.append(_tlv(der, s))
-            s = alg[-1][2]
+        alg = _children(der, spki[0][1], spki[0][2])
         if not alg or alg[0][0] != 0x06 or der[alg[0][1]:alg[0][2]] != _RSA_OID:
             raise JwtError("not an RSA key")
         # the BIT STRING's first byte counts unused bits (0), then RSAPublicKey
@@ -108,13 +108,14 @@ def public_key(pem):
 def private_key(pem):
     """A PEM private key (PKCS#1 or PKCS#8) -> (n, e, d)."""
     label, der = _pem(pem)
-    if label == "PRIVATE KEY":
-        outer = _seq(der, 0, len(der))
-        if len(outer) < 3 or outer[2][0] != 0x04:
-            raise JwtError("bad key")
-        der = der[outer[2][1]:outer[2][2]]
-    elif label != "RSA PRIVATE KEY":
+    if label not in ("PRIVATE KEY", "RSA PRIVATE KEY"):
         raise JwtError("not a private key")
+    top = _seq(der, 0, len(der))
+    if label == "PRIVATE KEY":
+        # PKCS#8: version, algorithm, then the PKCS#1 key in an OCTET STRING
+        if len(top) < 3 or top[2][0] != 0x04:
+            raise JwtError("bad key")
+        der = der[top[2][1]:top[2][2]]
     v = _ints(der, _seq(der, 0, len(der)))
     if len(v) < 4:
         raise JwtError("bad key")
