@@ -156,11 +156,17 @@ def test_usage_errors_say_what_is_missing_in_one_line(tmp_path):
     p = _acomm("emulate", "seatrac", "--link", str(tmp_path / "x"), "--directip", "127.0.0.1:1")
     _, err = p.communicate(timeout=20)
     assert p.returncode == 2 and "for iridium" in err, err
+    from acomm_cpython.emulate.rockblockgw import public_test_pem
+
     creds = tmp_path / "open.creds"
     creds.write_text("username=u\npassword=secret-pw\n")
     creds.chmod(0o644)
-    key = _private(tmp_path / "k.pem", "")
+    key = _private(tmp_path / "k.pem", public_test_pem())
     p = _acomm("node", "--name", "shore", "--id", "3", "--iridium",
                "rockblock:127.0.0.1:0,key=%s,mt=http://127.0.0.1:1/,credentials=%s" % (key, creds))
     _, err = p.communicate(timeout=20)
-    assert p.returncode != 0 and "not a PEM key" in err and "secret-pw" not in err, err
+    assert p.returncode == 1 and "too open" in err and "chmod 600" in err and "secret-pw" not in err, err
+    bad = _private(tmp_path / "bad.pem", "not a key")
+    p = _acomm("node", "--name", "shore", "--id", "3", "--iridium", "rockblock:127.0.0.1:0,key=%s" % bad)
+    _, err = p.communicate(timeout=20)
+    assert p.returncode == 1 and "not a PEM key" in err, err

@@ -49,6 +49,16 @@ def test_a_divers_packet_reaches_shore_and_a_command_comes_back_acknowledged(tmp
         rig.close()
 
 
+def test_frames_sealed_by_the_buoy_stay_sealed_to_the_shore(tmp_path):
+    rig = SurfaceRig(str(tmp_path), "directip", time_scale=20, key=bytes(range(16)))
+    try:
+        assert rig.report(b"sealed report", TIMEOUT_S) is not None
+        assert rig.got("shore", b"sealed report", authed=True)
+        assert rig.command(b"sealed command", TIMEOUT_S) is not None and rig.got("buoy", b"sealed command", True)
+    finally:
+        rig.close()
+
+
 def _free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -42,10 +42,12 @@ def write_private(path, text):
 
 class SurfaceRig:
     """The three nodes, the emulated modem and the gateway with one shore service ("directip" or
-    "rockblock"). close() at the end."""
+    "rockblock"). key: a network key (bytes) every node seals its frames with, or None. close()
+    at the end."""
 
-    def __init__(self, workdir, service, time_scale=20.0, retry_s=60.0):
+    def __init__(self, workdir, service, time_scale=20.0, retry_s=60.0, key=None):
         self.service = service
+        self.key = key
         self.time_scale = time_scale
         self.events = {n: [] for n in NAMES}
         self.nodes = {}
@@ -61,6 +63,10 @@ class SurfaceRig:
         n = Node(name, NAMES[name], listener=self.events[name].append)
         for k, v in NAMES.items():
             n.names.add(k, v)
+        if self.key is not None:
+            from acomm.frame.auth import Auth
+
+            n.set_auth(Auth(self.key))
         self.nodes[name] = n
         return n
 
@@ -113,9 +119,11 @@ class SurfaceRig:
             time.sleep(0.002)
         return False
 
-    def got(self, name, data):
-        """Whether node `name` has received a packet holding data."""
-        return any(ev[0] == EV_PACKET and ev[3] == data for ev in self.events[name])
+    def got(self, name, data, authed=None):
+        """Whether node `name` has received a packet holding data (authed: True, only one whose
+        every fragment's tag verified)."""
+        return any(ev[0] == EV_PACKET and ev[3] == data and (authed is None or ev[4:5] == (authed,))
+                   for ev in self.events[name])
 
     def status(self, name, pid):
         """The final status of node `name`'s packet pid, or None."""
