@@ -240,6 +240,14 @@ def test_forged_stale_replayed_and_malformed_posts_are_refused_with_a_4xx_and_co
                                 "malformed hex": 1, "unsigned": 1, "malformed form": 1, "stalled": 1}, port.refused
         assert got == [b"\x01"] and port.stats["mo_taken"] == 1
         assert _pumped(node, _post, port.address, rb.mo_form(fields(6, b"\x06"), priv)) == 200 and got[-1] == b"\x06"
+        held = [port.slots.acquire(blocking=False) for _ in range(16)]  # every slot busy
+        assert all(held)
+        with socket.create_connection(port.address, timeout=5) as s:
+            s.sendall(b"POST /mo HTTP/1.0\r\nContent-Length: 0\r\n\r\n")
+            assert s.recv(100) == b""  # closed unread
+        for _ in held:
+            port.slots.release()
+        assert port.refused["too many connections"] == 1
     finally:
         port.close()
 

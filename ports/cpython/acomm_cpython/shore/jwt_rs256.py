@@ -200,7 +200,7 @@ def decode(token, key, max_len=8192):
     try:
         head = json.loads(_unb64u(h))
         claims = json.loads(_unb64u(b))
-    except ValueError:
+    except (ValueError, RecursionError):  # deep nesting in 8 kB of JSON
         raise JwtError("malformed token") from None
     if not isinstance(head, dict) or not isinstance(claims, dict):
         raise JwtError("malformed token")

@@ -5,6 +5,7 @@
 # answered 200 only once its payload waits in the port's inbox, so nothing
 # acknowledged is lost; a refusal is counted in `refused` by its reason and
 # answered with a 4xx (503 when the inbox is full: Rock7 may try again).
+# At most max_conns requests are served at once; more are closed unread.
 # pump() hands the inbox to the driver on the node's loop. MT messages go
 # to the MT API by an HTTP(S) POST on a Worker thread.
 
@@ -30,6 +31,17 @@ class _Handler(http.server.BaseHTTPRequestHandler):
         # a connection that stalls mid-request ends after the port's stall_s
         self.timeout = self.server.port.stall_s
         http.server.BaseHTTPRequestHandler.setup(self)
+
+    def handle(self):
+        # at most max_conns requests at once: each holds a thread and up to MAX_FORM bytes
+        port = self.server.port
+        if not port.slots.acquire(blocking=False):
+            port.refuse("too many connections", 0)
+            return
+        try:
+            http.server.BaseHTTPRequestHandler.handle(self)
+        finally:
+            port.slots.release()
 
     def do_POST(self):
         port = self.server.port
@@ -64,13 +76,14 @@ class RockblockShorePort:
     no MT)."""
 
     def __init__(self, driver, listen, key, mt_url=None, credentials=None, max_age_s=300, stall_s=30.0,
-                 replay_capacity=4096):
+                 replay_capacity=4096, max_conns=16):
         self.driver = driver
         self.key = key
         self.mt_url = mt_url
         self.credentials = credentials
         self.max_age_s = max_age_s
         self.stall_s = stall_s
+        self.slots = threading.BoundedSemaphore(max_conns)
         self.replays = rb.Replays(replay_capacity)
         self.refused = {}  # reason -> count
         self.stats = {"mo_taken": 0, "mt_queued": 0, "mt_refused": 0}
