@@ -14,6 +14,7 @@ from acomm_cpython.emulate.rock7_testkey import PRIVATE_PEM
 from acomm_cpython.shore import directip as dip
 from acomm_cpython.shore import jwt_rs256 as jwt
 from acomm_cpython.shore import rockblock as rb
+from acomm_cpython.shore.seen import Replays
 
 IMEI = "300234010000001"
 PRIV = jwt.private_key(PRIVATE_PEM)
@@ -111,7 +112,7 @@ def _fields(momsn=1, data=b"hi"):
 
 
 def test_the_rockblock_post_is_checked_field_by_field():
-    replays = rb.Replays(2)
+    replays = Replays(2)
     good = rb.form(rb.mo_form(_fields(), PRIV))
     assert set(rb.MO_FIELDS) | {"JWT"} == set(good)
     mo = rb.check_mo(good, PUB, replays)

@@ -9,7 +9,6 @@
 # MT services is refused and counted by reason, answered as the protocol
 # allows, and the shore goes on. No timing is asserted.
 import http.client
-import os
 import socket
 import sys
 import threading

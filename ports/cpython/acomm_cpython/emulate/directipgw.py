@@ -16,7 +16,6 @@
 #       A sender that stalls for stall_s is cut off with -7.
 
 import socket
-import threading
 import socketserver
 
 from ..shore import directip as dip

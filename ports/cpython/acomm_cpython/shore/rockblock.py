@@ -9,7 +9,7 @@
 # fields as claims, with iat and iss "Rock7", signed RS256). check_mo()
 # takes a POST only when the JWT verifies, its claims repeat the form's
 # imei, momsn and data, it is no older than max_age_s, and (imei, momsn) has
-# not been taken before (Replays; a bounded table).
+# not been taken before (shore.seen.Replays, a bounded table).
 #
 # MT API: POST imei, username, password, data (hex) [, flush=yes] to
 # https://rockblock.rock7.com/rockblock/MT; the answer is "OK,<id>" or
@@ -19,7 +19,6 @@ import time
 from urllib.parse import parse_qs, urlencode
 
 from . import jwt_rs256
-from .seen import Replays  # noqa: F401 (the table check_mo reads)
 
 MT_URL = "https://rockblock.rock7.com/rockblock/MT"
 MO_FIELDS = ("imei", "serial", "momsn", "transmit_time", "iridium_latitude", "iridium_longitude", "iridium_cep",

@@ -16,6 +16,7 @@ import threading
 from urllib.parse import urlsplit
 
 from . import rockblock as rb
+from .seen import Replays
 from .worker import Worker, pump_mt
 
 _INBOX = 64  # MO messages taken but not yet handed to the driver
@@ -84,7 +85,7 @@ class RockblockShorePort:
         self.max_age_s = max_age_s
         self.stall_s = stall_s
         self.slots = threading.BoundedSemaphore(max_conns)
-        self.replays = rb.Replays(replay_capacity)
+        self.replays = Replays(replay_capacity)
         self.refused = {}  # reason -> count
         self.stats = {"mo_taken": 0, "mt_queued": 0, "mt_refused": 0}
         self._lock = threading.Lock()
