@@ -6,7 +6,8 @@
 # modem's pty) in this process. The buoy's frame reaches the shore node,
 # and the shore's `send buoy ... --ack` reaches the buoy as an MT message
 # and is acknowledged. The emulated world runs 20 times faster than real
-# time. Usage errors end with exit 2 and one line.
+# time. A RockBLOCK shore given no key= verifies with Rock7's published key
+# (the TEST key's POST is refused). Usage errors end with exit 2 and one line.
 import json
 import os
 import queue
@@ -146,10 +147,33 @@ def test_the_buoy_and_a_shore_node_talk_through_acomm_emulate_iridium(tmp_path, 
     assert shore.returncode == 0 and emu.returncode == 0, (shore.stderr.read(), emu.stderr.read())
 
 
+def test_a_rockblock_shore_without_key_verifies_with_rock7s_published_key(tmp_path):
+    # `--iridium rockblock:PORT` with no key=: a POST the emulator's TEST key signed is forged to it
+    import http.client
+
+    from acomm_cpython.emulate.rock7_testkey import PRIVATE_PEM
+    from acomm_cpython.shore import jwt_rs256
+    from acomm_cpython.shore import rockblock as rb
+
+    shore = _acomm("node", "--name", "shore", "--id", "3", "--json", "--iridium", "rockblock:127.0.0.1:0")
+    try:
+        line = _wait_line(_lines(shore), "rockblock listening", [])
+        port = int(json.loads(line)["text"].rsplit(":", 1)[1])
+        fields = {"imei": IMEI, "serial": "12345", "momsn": "1", "transmit_time": "21-10-31 10:41:50",
+                  "iridium_latitude": "52.3867", "iridium_longitude": "0.2938", "iridium_cep": "8", "data": "00"}
+        c = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+        c.request("POST", "/", rb.mo_form(fields, jwt_rs256.private_key(PRIVATE_PEM)),
+                  {"Content-Type": "application/x-www-form-urlencoded"})
+        assert c.getresponse().status == 401
+    finally:
+        shore.terminate()
+        shore.wait(10)
+
+
 def test_usage_errors_say_what_is_missing_in_one_line(tmp_path):
-    p = _acomm("node", "--name", "shore", "--id", "3", "--iridium", "rockblock:0")
+    p = _acomm("node", "--name", "shore", "--id", "3", "--iridium", "rockblock:0,mt=http://127.0.0.1:1/")
     _, err = p.communicate(timeout=20)
-    assert p.returncode == 2 and "key=PEM" in err and len(err.strip().splitlines()) == 1, err
+    assert p.returncode == 2 and "credentials=FILE" in err and len(err.strip().splitlines()) == 1, err
     p = _acomm("node", "--name", "shore", "--id", "3", "--iridium", "satphone:0")
     _, err = p.communicate(timeout=20)
     assert p.returncode == 2 and "directip:" in err, err

@@ -1,7 +1,8 @@
 # The shore's sans-IO codecs (acomm_cpython.shore): DirectIP messages both
 # ways with every IE field, and what each refuses by name; RS256 JWTs in
 # pure Python (a token the emulator's test key signed verifies, a tampered,
-# unsigned or "alg: none" one does not); the RockBLOCK MO POST's checks
+# unsigned or "alg: none" one does not; Rock7's published key is read and a
+# token Rock7 published verifies under it); the RockBLOCK MO POST's checks
 # (missing field, malformed hex, unsigned, forged, claims that differ from
 # the form, stale, replayed) and the MT API's form and answers.
 import struct
@@ -14,6 +15,7 @@ from acomm_cpython.emulate.rock7_testkey import PRIVATE_PEM
 from acomm_cpython.shore import directip as dip
 from acomm_cpython.shore import jwt_rs256 as jwt
 from acomm_cpython.shore import rockblock as rb
+from acomm_cpython.shore.rock7_key import PUBLIC_PEM as ROCK7_PEM
 from acomm_cpython.shore.seen import Replays
 
 IMEI = "300234010000001"
@@ -32,6 +34,23 @@ n4vYS0YE3bMKx/6NtEKJOb+47S75Ck5I0bfxbDqWQFt/9F8X5xERl2Th/zX8Jz//
 /QIDAQAB
 -----END PUBLIC KEY-----
 """
+
+# A token Rock7 signed: the JSON example on its push API page,
+# https://docs.rock7.com/reference/push-api (read 2026-11-27). It verifies
+# under the key Ground Control publishes for RockBLOCK's MO webhook
+# (shore.rock7_key), so it shows what the real service's tokens ask of us.
+ROCK7_EXAMPLE_JWT = (
+    "eyJhbGciOiJSUzI1NiJ9.eyJpc3MiOiJSb2NrIDciLCJpYXQiOjE2Nzg3ODUzMDgsImFsdCI6IjAiLCJhdCI6IjIwMjMtMDMtMTR"
+    "UMDk6MTA6MDFaIiwiYXZlcmFnZUNvZyI6IjMyOCIsImF2ZXJhZ2VTb2ciOiIwLjAiLCJiYXR0ZXJ5IjoiOTgiLCJjb2ciOiIzMjg"
+    "iLCJkZXZpY2VfdHlwZSI6IkdSSUZGSU4iLCJpZCI6ImVKd2d6ZHBYVnhOUm5vcHJaZXdiV01EbFFHTFB2QWJrIiwiaW1laSI6IjM"
+    "wMDQzNDA2MjkyOTU0MCIsImxhdCI6IjUxLjQ5NTQwIiwibG9uIjoiLTMuMTcwNDAiLCJtb21zbiI6IjcwMTU0ODcxIiwicG93ZXI"
+    "iOiJ0cnVlIiwic2VyaWFsIjoiMTAwMDE1Iiwic29nIjoiMC4wIiwic291cmNlIjoiR1BTIiwidGVtcCI6IjAuMCIsInRyYW5zbWl"
+    "0X3RpbWUiOiIyMDIzLTAzLTE0VDA5OjE1OjA0WiIsInRyYW5zcG9ydCI6IkdQUlMiLCJ0cmlnZ2VyIjoiQlVSU1QiLCJ0eEF0Ijo"
+    "iMjAyMy0wMy0xNFQwOToxNTowNFoifQ.g4AMhUDwaK-WKaaITOKMtIu8lVtsEBfJ-00ytW-c0jyGUFxNW0259Dj9JcR34NaIai-y"
+    "sSTVzqXBdROsZAiZS0oTSRum9l56JwZQTE0-Zx5yUUO8AOsUqXPjsSg2lSgsnSMTiQHXOzhydL9GIkmiEVdwANeaB24AuP45__zU"
+    "wjhwniUfi-Z2RTG8J22GqnQ9Q_w9Z861A0Bos7LmJEymbmcLOiDDdzfYxvVWE6GSm2y8ypBZEqhI0byNphZ5adIFM19iyqng4MVp"
+    "Qe0Uh9Jc49RR_IAjte3AMS4Y82lO76sM90Tu3-3Jwhj3Iq_NGpfd4735Bl-b5FR5oePP40mV3Q"
+)
 
 
 def _read(data, allowed=dip.MO_IES, chunk=1):
@@ -104,6 +123,21 @@ def test_rs256_tokens_verify_and_tampered_or_unsigned_ones_do_not():
     assert jwt.public_key(SPKI) == PUB
     with pytest.raises(jwt.JwtError):
         jwt.public_key("-----BEGIN PUBLIC KEY-----\nAAAA\n-----END PUBLIC KEY-----")
+
+
+def test_rock7s_published_key_is_read_and_verifies_a_token_rock7_signed():
+    n, e = jwt.public_key(ROCK7_PEM)
+    assert (n.bit_length(), e) == (2048, 65537)
+    claims = jwt.decode(ROCK7_EXAMPLE_JWT, (n, e))
+    # the claims check_mo() asks of a token are all there, in the service's own shape
+    assert claims["iss"] == rb.ISSUER and isinstance(claims["iat"], int)
+    assert isinstance(claims["imei"], str) and isinstance(claims["momsn"], str)
+    with pytest.raises(jwt.JwtError) as err:
+        jwt.decode(ROCK7_EXAMPLE_JWT, PUB)
+    assert err.value.reason == "bad signature"
+    # the emulator's tokens have the same header as Rock7's: {"alg": "RS256"} alone
+    head = ROCK7_EXAMPLE_JWT.split(".")[0]
+    assert jwt.encode({"iat": 1}, PRIV).split(".")[0] == head
 
 
 def _fields(momsn=1, data=b"hi"):

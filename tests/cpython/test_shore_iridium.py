@@ -304,6 +304,11 @@ def test_the_gateways_mt_services_answer_with_their_documented_codes():
         assert api(data="").startswith(b"FAILED,16,")
         net.mt[IMEI] = []
         assert api().startswith(b"OK,") and net.queued(IMEI) == 1
+        assert api().startswith(b"OK,") and net.queued(IMEI) == 2
+        # the fields in the URL, as the service's page sends them; flush=yes empties the queue first
+        c = http.client.HTTPConnection(*rgw.mt_address, timeout=5)
+        c.request("POST", "/rockblock/MT?" + rb.mt_form(IMEI, *CREDENTIALS, b"\x07", flush=True).decode())
+        assert c.getresponse().read().startswith(b"OK,") and net.mt[IMEI] == [b"\x07"]
         assert dgw.refused == {"truncated IE": 1, "stalled": 1}
     finally:
         stop.append(1)

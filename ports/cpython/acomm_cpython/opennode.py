@@ -20,7 +20,8 @@ class open_node:
     modems: --modem texts ("seatrac:/dev/ttyUSB0", "evologics:tcp://HOST:9200", ...); udp:
     "[HOST:]PORT" of a UDP link (0: any port); tcp_listen / tcp_connect: a TCP server or client
     link; iridium: --iridium texts of shore links through the Iridium gateway, no modem
-    ("directip:10800,mt=HOST:PORT", "rockblock:8080,key=rock7.pem,...", docs/drivers-iridium.md),
+    ("directip:10800,mt=HOST:PORT", "rockblock:8080,mt=URL,credentials=FILE", key=PEM only to
+    verify with another key than Rock7's published one; docs/drivers-iridium.md),
     each a link named "satellite" (then "satellite2", ...); known: other nodes' names -> ids; key_file: the network key (hex in a file only its owner
     reads); store: a folder for the transport's persistent store (None: in RAM); transport=False:
     none. udp_peers: static UDP peers, id -> "HOST:PORT"; multicast=False: the UDP link announces

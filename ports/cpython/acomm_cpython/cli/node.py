@@ -47,8 +47,8 @@ def add_arguments(p):
                         "socket://HOST:PORT or rfc2217://HOST:PORT (repeat for more links)" % ", ".join(sorted(DRIVERS)))
     p.add_argument("--iridium", action="append", default=[], metavar="SERVICE:[HOST:]PORT[,KEY=VALUE...]",
                    help="a shore link to buoys through the Iridium gateway, no modem: directip:PORT[,mt=HOST:PORT]"
-                        "[,imei=IMEI][,gateway=IP] or rockblock:PORT,key=PEM[,mt=URL,credentials=FILE][,imei=IMEI] "
-                        "(docs/drivers-iridium.md)")
+                        "[,imei=IMEI][,gateway=IP] or rockblock:PORT[,key=PEM][,mt=URL,credentials=FILE][,imei=IMEI] "
+                        "(key: the JWT's public key, default the one Rock7 publishes; docs/drivers-iridium.md)")
     p.add_argument("--driver-option", action="append", default=[], metavar="KEY=VALUE",
                    help="an option of the modems' drivers (docs/drivers.md), e.g. cmd_timeout_ms=3000")
     p.add_argument("--advert-period", type=float, metavar="S",

@@ -1,8 +1,8 @@
 # A TEST KEY, not Rock7's: the RSA key (2048 bits, made once with
 # `openssl genrsa`) with which the emulated RockBLOCK service signs its MO
 # POSTs (acomm_cpython.emulate.rockblockgw). Its private half is public
-# here, so a JWT it signs proves nothing outside tests: a shore node must be
-# given Rock7's own public key in production. `acomm emulate iridium
+# here, so a JWT it signs proves nothing outside tests: a shore node uses
+# Rock7's published key (shore.rock7_key) unless told otherwise. `acomm emulate iridium
 # --rockblock-public-key PATH` writes the public half for a shore under test.
 
 PRIVATE_PEM = """\

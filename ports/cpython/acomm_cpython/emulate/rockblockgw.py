@@ -7,10 +7,15 @@
 #       the TEST key of rock7_testkey at each attempt). 200 is delivered; a
 #       server that is down or answers 5xx is tried again every retry_ms of
 #       emulated time (shoregw.Outbox); a 4xx is a refusal, not retried.
-#   MT: the MT API's form (imei, username, password, data in hex, flush)
-#       on an HTTP listener, answered "OK,<id>" or "FAILED,<code>,<text>":
-#       10 wrong credentials, 11 no such IMEI, 14 bad hex, 15 too long for
-#       the modem, 16 no data, 99 the gateway's queue for the IMEI is full.
+#   MT: the MT API's fields (imei, username, password, data in hex,
+#       flush=yes: the IMEI's queue emptied first) in the POST's body or its
+#       query string (the service's page sends them in the URL) on an HTTP
+#       listener, answered "OK,<id>" or "FAILED,<code>,<text>" with the
+#       page's codes: 10 wrong credentials, 11 no such IMEI, 14 bad hex, 15
+#       too long for the modem, 16 no data, 99 the gateway's queue for the
+#       IMEI is full (12 line rental and 13 credit are never refused here).
+#   Pages: https://docs.groundcontrol.com/iot/rockblock/web-services/sending-mt-message
+#   and .../receiving-mo-message (docs/drivers-iridium.md, Conformance).
 
 import http.client
 import http.server
@@ -39,8 +44,11 @@ class _MtHandler(http.server.BaseHTTPRequestHandler):
     def do_POST(self):
         gw = self.server.gateway
         try:
-            n = int(self.headers.get("Content-Length", ""))
+            n = int(self.headers.get("Content-Length", "0"))
             fields = rb.form(self.rfile.read(n) if 0 <= n <= rb.MAX_FORM else b"x" * (rb.MAX_FORM + 1))
+            query = urlsplit(self.path).query.encode("ascii", "replace")
+            if query:
+                fields.update(rb.form(query))
         except (ValueError, OSError, rb.RockblockError):
             return self._answer(400, b"")
         answer = gw.mt(fields)

@@ -183,8 +183,10 @@ def _unb64u(s):
 
 
 def encode(claims, key):
-    """A compact JWT of the claims (a dict) signed RS256 with the private key (n, e, d)."""
-    head = _b64u(json.dumps({"alg": "RS256", "typ": "JWT"}, separators=(",", ":")).encode())
+    """A compact JWT of the claims (a dict) signed RS256 with the private key (n, e, d).
+
+    The header is {"alg":"RS256"} alone, as Rock7's tokens have it (decode() asks no more)."""
+    head = _b64u(json.dumps({"alg": "RS256"}, separators=(",", ":")).encode())
     body = _b64u(json.dumps(claims, separators=(",", ":")).encode())
     signing = (head + "." + body).encode("ascii")
     return head + "." + body + "." + _b64u(sign(signing, key))

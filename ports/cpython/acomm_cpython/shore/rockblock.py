@@ -1,19 +1,26 @@
-# The RockBLOCK web service (Rock7), sans-IO: the HTTP POST of form fields
-# that delivers each MO message to the customer's endpoint, with a JWT that
-# Rock7 signs (RS256), and the MT API's form and its one-line answers.
-# docs/drivers-iridium.md has each field with its source.
+# The RockBLOCK web service (Rock7, now Ground Control), sans-IO: the HTTP
+# POST of form fields that delivers each MO message to the customer's
+# endpoint, with a JWT that Rock7 signs (RS256), and the MT API's form and
+# its one-line answers. docs/drivers-iridium.md has each field with its
+# source; the pages are
+#   MO: https://docs.groundcontrol.com/iot/rockblock/web-services/receiving-mo-message
+#   MT: https://docs.groundcontrol.com/iot/rockblock/web-services/sending-mt-message
+#   JWT claims: https://docs.rock7.com/reference/push-api (an example token)
 #
 # MO POST (application/x-www-form-urlencoded): imei, serial, momsn,
 # transmit_time ("YY-MM-DD HH:MM:SS", UTC), iridium_latitude,
-# iridium_longitude, iridium_cep, data (the payload in hex), JWT (the same
-# fields as claims, with iat and iss "Rock7", signed RS256). check_mo()
-# takes a POST only when the JWT verifies, its claims repeat the form's
-# imei, momsn and data, it is no older than max_age_s, and (imei, momsn) has
-# not been taken before (shore.seen.Replays, a bounded table).
+# iridium_longitude, iridium_cep, data (the payload in hex), JWT. Rock7's
+# tokens carry the POST's fields as string claims plus "iss": "Rock 7" and
+# "iat" (seconds), under the header {"alg": "RS256"} alone (no typ, no kid,
+# no exp): that is all check_mo() asks of them. It takes a POST only when
+# the JWT verifies, its claims repeat the form's imei, momsn and data, it is
+# no older than max_age_s, and (imei, momsn) has not been taken before
+# (shore.seen.Replays, a bounded table).
 #
-# MT API: POST imei, username, password, data (hex) [, flush=yes] to
-# https://rockblock.rock7.com/rockblock/MT; the answer is "OK,<id>" or
-# "FAILED,<code>,<text>" (MT_FAILURES).
+# MT API: POST imei, username, password, data (hex) [, flush=yes: empty the
+# IMEI's MT queue first] to https://rockblock.rock7.com/rockblock/MT; the
+# answer is "OK,<mtId>" or "FAILED,<code>,<text>" (MT_FAILURES, the page's
+# table).
 
 import time
 from urllib.parse import parse_qs, urlencode
@@ -21,6 +28,7 @@ from urllib.parse import parse_qs, urlencode
 from . import jwt_rs256
 
 MT_URL = "https://rockblock.rock7.com/rockblock/MT"
+ISSUER = "Rock 7"  # the "iss" claim of Rock7's tokens (the push API page's example)
 MO_FIELDS = ("imei", "serial", "momsn", "transmit_time", "iridium_latitude", "iridium_longitude", "iridium_cep",
              "data")
 MT_FAILURES = {
@@ -88,7 +96,7 @@ def check_mo(fields, key, replays, now_s=None, max_age_s=300, mo_max=340):
     except jwt_rs256.JwtError as e:
         raise RockblockError("bad signature" if e.reason in ("bad signature", "not RS256") else "unsigned", 401) \
             from None
-    if any(str(claims.get(f)) != fields[f] for f in ("imei", "momsn", "data")) or claims.get("iss") != "Rock7":
+    if any(str(claims.get(f)) != fields[f] for f in ("imei", "momsn", "data")) or claims.get("iss") != ISSUER:
         raise RockblockError("claims differ", 401)
     now_s = time.time() if now_s is None else now_s
     iat = claims.get("iat")
@@ -103,7 +111,7 @@ def mo_form(fields, key, now_s=None):
     """What Rock7 POSTs for one MO message: the fields (hex data included) and their JWT, urlencoded."""
     claims = dict(fields)
     claims["iat"] = int(time.time() if now_s is None else now_s)
-    claims["iss"] = "Rock7"
+    claims["iss"] = ISSUER
     body = dict(fields)
     body["JWT"] = jwt_rs256.encode(claims, key)
     return urlencode(body).encode("ascii")

@@ -4,11 +4,12 @@
 #   directip:[HOST:]PORT[,mt=HOST:PORT][,imei=IMEI][,gateway=IP]...
 #       MO messages by DirectIP to this listener; MT messages to the
 #       gateway's MT DirectIP port; gateway=: only these addresses may connect
-#   rockblock:[HOST:]PORT,key=PEM[,mt=URL,credentials=FILE][,imei=IMEI][,max_age=S]
+#   rockblock:[HOST:]PORT[,key=PEM][,mt=URL,credentials=FILE][,imei=IMEI][,max_age=S]
 #       Rock7's MO POSTs to this HTTP listener, verified with the public key
-#       in PEM (required: no key text of Rock7's is shipped); MT messages to
-#       the MT API at URL (default Rock7's) as the user in FILE (username= and
-#       password= lines, a file only its owner can read)
+#       Rock7 publishes (shore.rock7_key) or the one in the PEM file key=
+#       (the emulator's TEST key under test); MT messages to the MT API at
+#       URL (default Rock7's) as the user in FILE (username= and password=
+#       lines, a file only its owner can read)
 #
 # imei: the buoy's IMEI (else the first MO message's, and MT waits for it).
 
@@ -25,7 +26,7 @@ def parse_spec(text):
     """An --iridium text -> (service, (host, port), {key: value or [values] for gateway}); ModemSpecError."""
     service, sep, rest = text.partition(":")
     if service not in SERVICES or not sep or not rest:
-        raise ModemSpecError("--iridium %r: want directip:[HOST:]PORT[,...] or rockblock:[HOST:]PORT,key=PEM[,...]" % text)
+        raise ModemSpecError("--iridium %r: want directip:[HOST:]PORT[,...] or rockblock:[HOST:]PORT[,...]" % text)
     parts = rest.split(",")
     try:
         listen = hostport(parts[0])
@@ -41,9 +42,6 @@ def parse_spec(text):
         else:
             opts[k] = v
     if service == "rockblock":
-        if "key" not in opts:
-            raise ModemSpecError("--iridium %r: give key=PEM, the RockBLOCK service's public key (Rock7 publishes "
-                                 "it; acomm ships none)" % text)
         if "mt" in opts and "credentials" not in opts:
             raise ModemSpecError("--iridium %r: mt=URL needs credentials=FILE" % text)
     return service, listen, opts
@@ -60,17 +58,10 @@ def add_shore_link(node, text, name="satellite", **link_options):
         mt = hostport(opts["mt"], "127.0.0.1") if "mt" in opts else None
         port = DirectIpShorePort(driver, listen, mt=mt, gateways=opts["gateway"] or None)
     else:
-        from . import jwt_rs256
         from .rockblock import MT_URL, read_credentials
         from .rockblock_port import RockblockShorePort
 
-        try:
-            with open(opts["key"]) as f:
-                key = jwt_rs256.public_key(f.read())
-        except OSError as e:
-            raise AcommError("key %s: %s" % (opts["key"], e.strerror or e))
-        except jwt_rs256.JwtError as e:
-            raise AcommError("key %s: %s" % (opts["key"], e.reason))
+        key = _rockblock_key(opts.get("key"))
         creds = read_credentials(opts["credentials"]) if "credentials" in opts else None
         mt_url = opts.get("mt", MT_URL) if creds else None
         try:
@@ -87,3 +78,20 @@ def add_shore_link(node, text, name="satellite", **link_options):
         port.close()
         raise
     return link, port
+
+
+def _rockblock_key(path):
+    # the JWT's verification key (n, e): Rock7's published one unless a PEM file is given
+    from . import jwt_rs256
+
+    if path is None:
+        from .rock7_key import PUBLIC_PEM
+
+        return jwt_rs256.public_key(PUBLIC_PEM)
+    try:
+        with open(path) as f:
+            return jwt_rs256.public_key(f.read())
+    except OSError as e:
+        raise AcommError("key %s: %s" % (path, e.strerror or e))
+    except jwt_rs256.JwtError as e:
+        raise AcommError("key %s: %s" % (path, e.reason))
