@@ -1,0 +1,95 @@
+# The link budget of one arrival, as functions of the site, the two modems'
+# models and the geometry: what acomm_sim.physchannel does per copy of a
+# packet, and what a planner asks without running a network ("will my buoy
+# hear the diver at 800 m?": link_pdr). Portable Python.
+
+from . import acoustics as ac
+from . import detection as det
+from .modems_db import model
+from .multipath import late_echo_ratio
+
+
+def absorption(site, f_khz):
+    """Absorption in the site's water at f_khz -> dB/km: Thorp, or
+    Francois-Garrison at the site's temperature, salinity, pH and half its
+    depth (site.absorption == 'fg')."""
+    if site.absorption == "fg":
+        return ac.francois_garrison_db_per_km(f_khz, site.temperature_c, site.salinity_psu, site.depth_m / 2, site.ph)
+    return ac.thorp_db_per_km(f_khz)
+
+
+def noise_power(site, m):
+    """Ambient noise in modem model m's band at the site (uPa^2, linear)."""
+    lo, hi = m["band_khz"]
+    return ac.lin(ac.noise_band_db(lo, hi, site.wind_mps, site.shipping))
+
+
+def received(site, ms, mr, metres, zs, zr, alpha=None):
+    """(power uPa^2, late echo ratio) of a packet from a modem of model ms at
+    depth zs to one of model mr at depth zr, metres apart (straight line):
+    the source level less spreading and absorption at the sender's centre
+    frequency, times the share of the sender's band the receiver listens to
+    (0 when the bands do not meet); the late echoes as multipath says."""
+    lo = max(ms["band_khz"][0], mr["band_khz"][0])
+    hi = min(ms["band_khz"][1], mr["band_khz"][1])
+    if hi <= lo:
+        return 0.0, 0.0
+    share = (hi - lo) / (ms["band_khz"][1] - ms["band_khz"][0])
+    if alpha is None:
+        alpha = absorption(site, (ms["band_khz"][0] + ms["band_khz"][1]) / 2)
+    power = ac.lin(ms["sl_db"] - ac.transmission_loss_db(metres, alpha, site.spreading_k)) * share
+    dz = zr - zs
+    h = (metres * metres - dz * dz) ** 0.5 if metres * metres > dz * dz else 0.0
+    late = late_echo_ratio(h, zs, zr, site, alpha, mr["tolerance_ms"])[0]
+    return power, late
+
+
+def chances(m, power, noise, inter_pre=0.0, inter=0.0, frac=0.0, nbits=None, thr=None):
+    """What receiver model m makes of a packet of `power` over `noise` (both
+    uPa^2; noise includes the late echoes), with interference inter_pre
+    during its preamble and `inter` (overlap-weighted) over the share `frac`
+    of it that others overlap -> (P detected, P no bit wrong given detected,
+    mean bit error rate). nbits: the frame's bits on the air (default: the
+    model's default packet plus its framing); thr: det.q_inv(m['pfa'])."""
+    bw = (m["band_khz"][1] - m["band_khz"][0]) * 1000
+    if thr is None:
+        thr = det.q_inv(m["pfa"])
+    if nbits is None:
+        nbits = (m["default_bytes"] + m["overhead_bytes"]) * 8
+    pd = det.detection_probability(power / (noise + inter_pre), bw, m["preamble_s"], thr)
+    ber_clean = det.ber(m["modulation"], det.ebn0(power / noise, bw, m["bitrate"], m["coding_gain_db"]))
+    ber_hit = ber_clean
+    if frac > 0:
+        ber_hit = det.ber(m["modulation"], det.ebn0(power / (noise + inter / frac), bw, m["bitrate"],
+                                                     m["coding_gain_db"]))
+    ok = det.frame_ok(ber_clean, nbits * (1 - frac)) * det.frame_ok(ber_hit, nbits * frac)
+    return pd, ok, ber_clean * (1 - frac) + ber_hit * frac
+
+
+def link_pdr(site, name, metres, nbytes=None, zs=None, zr=None):
+    """Chance that a packet of nbytes (default: the model's) sent over
+    `metres` between two modems of model `name` at depths zs, zr (default:
+    the site's node depth) arrives whole, with no other traffic."""
+    m = model(name)
+    zs = site.node_depth_m if zs is None else zs
+    zr = site.node_depth_m if zr is None else zr
+    power, late = received(site, m, m, metres, zs, zr)
+    nbits = None if nbytes is None else (nbytes + m["overhead_bytes"]) * 8
+    pd, ok, _ = chances(m, power, noise_power(site, m) + power * late, nbits=nbits)
+    return pd * ok
+
+
+def range_at(site, name, pdr=0.9, nbytes=None, lo=1.0, hi=100000.0):
+    """The range (m) at which link_pdr falls to `pdr` (bisection on a
+    falling curve; hi if it never does within hi, lo if it starts below)."""
+    if link_pdr(site, name, lo, nbytes) < pdr:
+        return lo
+    if link_pdr(site, name, hi, nbytes) >= pdr:
+        return hi
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        if link_pdr(site, name, mid, nbytes) >= pdr:
+            lo = mid
+        else:
+            hi = mid
+    return (lo + hi) / 2

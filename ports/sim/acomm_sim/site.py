@@ -1,0 +1,92 @@
+# The site of a physics channel and the scenario file that describes it: the
+# water (depth, temperature, salinity, pH), the weather and traffic that make
+# its noise (wind, shipping), how sound spreads, how its boundaries reflect,
+# and optionally the nodes and their modems. JSON on both runtimes (json is
+# in MicroPython); on CPython 3.11+ a .toml file is read with tomllib.
+# Portable Python.
+
+import json
+
+# name -> default; docs/simulator.md says what each means
+DEFAULTS = {
+    "depth_m": 100.0,  # water depth (isovelocity channel for multipath)
+    "temperature_c": 10.0,
+    "salinity_psu": 35.0,
+    "ph": 8.0,
+    "wind_mps": 5.0,  # wind speed at the surface (noise)
+    "shipping": 0.5,  # shipping activity 0 (none) .. 1 (heavy)
+    "spreading_k": 1.5,  # 1 cylindrical, 2 spherical
+    "absorption": "thorp",  # or "fg" (Francois-Garrison at this water)
+    "sound_speed": 1500.0,
+    "surface_loss_db": 1.0,  # lost per surface reflection
+    "bottom_loss_db": 6.0,  # lost per bottom reflection
+    "max_bounces": 6,  # image arrivals up to this many reflections
+    "node_depth_m": 10.0,  # depth of a node given no position
+}
+
+
+class Site:
+    """The water and weather of a physics channel: attributes named as in
+    DEFAULTS; unknown keys raise ValueError (a typo must not pass silently)."""
+
+    def __init__(self, **kw):
+        for k in kw:
+            if k not in DEFAULTS:
+                raise ValueError("unknown site parameter %r; known: %s" % (k, ", ".join(sorted(DEFAULTS))))
+        for k in DEFAULTS:
+            v = kw.get(k, DEFAULTS[k])
+            setattr(self, k, v if isinstance(DEFAULTS[k], str) else float(v))
+        if self.absorption not in ("thorp", "fg"):
+            raise ValueError("absorption is 'thorp' or 'fg', not %r" % (self.absorption,))
+        if self.depth_m <= 0:
+            raise ValueError("depth_m must be positive")
+        self.max_bounces = int(self.max_bounces)
+
+    def as_dict(self):
+        """The parameters as a dict (DEFAULTS' keys)."""
+        return {k: getattr(self, k) for k in DEFAULTS}
+
+    def with_(self, **kw):
+        """A copy with some parameters changed."""
+        d = self.as_dict()
+        d.update(kw)
+        return Site(**d)
+
+
+class Scenario:
+    """A scenario file's content: `site` (a Site), `channel` ("physics" or
+    "curve"), `nodes` (a list of dicts: name, id, modem, position [east,
+    north, depth], optional model: the physics modem model's name)."""
+
+    def __init__(self, site, channel="physics", nodes=()):
+        if channel not in ("physics", "curve"):
+            raise ValueError("channel is 'physics' or 'curve', not %r" % (channel,))
+        self.site = site
+        self.channel = channel
+        self.nodes = list(nodes)
+
+
+def parse(data):
+    """A Scenario from the decoded file (a dict with optional "site",
+    "channel" and "nodes"); raises ValueError on bad content."""
+    if not isinstance(data, dict):
+        raise ValueError("a scenario file holds an object")
+    for k in data:
+        if k not in ("site", "channel", "nodes"):
+            raise ValueError("unknown scenario key %r (site, channel, nodes)" % (k,))
+    nodes = data.get("nodes", [])
+    for n in nodes:
+        if not isinstance(n, dict) or "name" not in n or "position" not in n:
+            raise ValueError("a node has at least a name and a position: %r" % (n,))
+    return Scenario(Site(**data.get("site", {})), data.get("channel", "physics"), nodes)
+
+
+def load(path):
+    """The Scenario in the file at `path` (.json; .toml on CPython 3.11+)."""
+    if path.endswith(".toml"):
+        import tomllib  # CPython 3.11+ only; the JSON form works everywhere
+
+        with open(path, "rb") as f:
+            return parse(tomllib.load(f))
+    with open(path) as f:
+        return parse(json.load(f))
