@@ -1,7 +1,9 @@
 # The main job: `acomm demo`'s mission, run once (about 2 s of wall time)
 # and checked for what its timeline claims: discovery, the CADDY phase, an
 # alarm overtaking the dive log, the teleop failsafe tripping in the
-# acoustic shadow and recovering, traffic waiting through the outage; and
+# acoustic shadow and recovering, traffic waiting through the outage; the
+# buoy's alarm reaching the shore node over Iridium SBD and DirectIP and the
+# shore's command coming back as an MT message, all in virtual time; and
 # the command line's JSON summary, CSV and determinism.
 import csv
 import json
@@ -67,6 +69,33 @@ def test_traffic_waits_through_the_outage_and_flows_after():
     rows = m.traffic.log.rows.values()
     status = [r for r in rows if r[1] == "status" and 960000 <= r[6] < 1080000]
     assert status and all(r[7] is not None and r[7] >= 1080000 for r in status)
+
+
+def test_the_alarm_reaches_shore_by_directip_and_the_command_comes_back_as_mt():
+    from acomm_cpython.demo.uplink import COMMAND
+    from acomm_cpython.shore import directip as dip
+
+    m, s = mission()
+    u, r = m.uplink, s["uplink"]
+    # every MO message reached the shore node as DirectIP bytes, parsed by its Reader and confirmed,
+    # in MOMSN order; the alarm is in one of them (inside the buoy's acomm frame)
+    assert r["mo_by_directip"] >= 2 and r["mo_momsn"] == list(range(1, r["mo_by_directip"] + 1))
+    assert all(taken == 1 for _, _, _, taken in u.port.mo) and r["refused"] == {}
+    payloads = [dip.decode_mo(dip.Reader(dip.MO_IES).feed(msg))["payload"] for _, _, msg, _ in u.port.mo]
+    assert any(b"ALARM low_air" in p for p in payloads)
+    assert u.driver.stats["mo_delivered"] == r["mo_by_directip"]
+    # the shore got it, and the buoy got the shore's ACK back as an MT message
+    alarm_at = 390 + s["alarm"]["latency_s"]
+    assert r["report_to_shore_s"] is not None and r["report_acked_s"] > r["report_to_shore_s"]
+    # the command: handed to the gateway by DirectIP (queued: a place >= 1), collected by the buoy
+    # in a session, and the buoy's ACK came back to shore by DirectIP
+    assert r["mt_by_directip"] >= 2 and all(st >= 1 for st in r["mt_statuses"])
+    assert r["command_to_buoy_s"] is not None and r["command_session"].startswith("AT+SBDIX")
+    assert r["command_acked_s"] > r["command_to_buoy_s"]
+    said = [t for ms, tag, t in m.timeline if tag == "uplink" and ms / 1000 > alarm_at]
+    assert any("buoy <- shore %r" % COMMAND.decode() in t for t in said), said
+    # the acoustic mission saw none of it: the shore is not one of its nodes
+    assert len(m.discovered) == 6
 
 
 def test_summary_rows_cover_every_class_with_sane_figures():

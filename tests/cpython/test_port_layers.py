@@ -26,7 +26,8 @@ MAY_IMPORT = {
     "console": {"library", "acomm_web"},
     "emulate": {"library", "shore", "acomm_sim"},
     "bridges": {"library", "acomm_sim"},
-    "demo": {"library", "acomm_sim", "acomm_web"},
+    # demo: its uplink (demo.uplink) runs the emulated gateway's DirectIP and a shore node's link
+    "demo": {"library", "shore", "emulate", "acomm_sim", "acomm_web"},
     # acomm_boards: the boards shipped with acomm (package data)
     "board": {"library", "console", "acomm_mp", "acomm_web", "acomm_boards"},
     "bench": {"library", "shore", "board", "demo", "emulate", "bridges", "acomm_sim", "acomm_web", "acomm_mp"},

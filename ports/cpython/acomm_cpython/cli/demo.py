@@ -110,7 +110,7 @@ def _report(args, m, wall, web):
     print()
     print(report.table(s))
     print()
-    for key in ("caddy", "log", "alarm", "teleop", "outage", "channel"):
+    for key in ("caddy", "log", "alarm", "teleop", "outage", "uplink", "channel"):
         if s[key] is not None:
             print("%-8s %s" % (key, json.dumps(s[key])))
     if s["discovery_s"] is not None:

@@ -17,6 +17,9 @@
 #   960  a ship passes overhead: 2 minutes in which nobody hears anything;
 #        telemetry waits in the queues and flows afterwards
 #  1200  end
+# The buoy also has its Iridium 9603 (demo.uplink): it relays the alarm to
+# a shore node by SBD and the gateway's DirectIP, and the shore's command
+# comes back as an MT message.
 from acomm.catalog import caddy, teleop
 from acomm.events import AVAIL_NAMES, EV_AVAILABILITY, EV_RECEIVED, EV_STATUS, FAILED, EXPIRED
 from acomm.drivers.mac import Aloha, Tdma
@@ -27,6 +30,7 @@ from acomm_sim.world import World
 from .apps import CADDY, DiveLog, Periodic, Pilot, Timetable, Vehicle, dive_log_lines
 from .places import ADDR, AUV, BUOY, DIVER, LOSS_CURVE, START
 from .traffic import Traffic
+from .uplink import SAT, Uplink
 
 LINK = "acoustic"
 PARTS = {BUOY: "X150 USBL", DIVER: "X110 modem", AUV: "X150 USBL"}
@@ -65,11 +69,13 @@ def _fmt(ms):
 
 
 class Mission:
-    def __init__(self, seed=1, minutes=20, say=None, caddy_phase=True, usbl_noise=None, mac="tdma"):
+    def __init__(self, seed=1, minutes=20, say=None, caddy_phase=True, usbl_noise=None, mac="tdma", uplink=True):
         # usbl_noise: (range m, bearing degrees), the largest error of the
         # X150s' fixes (uniform); None: exact fixes, as the figures assume.
         # mac: the channel access wherever the plan sets a schedule: "tdma"
         # (the plan's slots), "aloha" (random access) or "none" (acomm sweep)
+        # uplink: the buoy's Iridium link and the shore node (False: the
+        # water alone, as acomm sweep compares the acoustic MACs)
         if mac not in MACS:
             raise ValueError("mac is %s, not %r" % (", ".join(MACS), mac))
         self.mac = mac
@@ -115,6 +121,7 @@ class Mission:
         self._plan()
         for task in [self.plan, self.vehicle, self.pilot] + self.streams:
             w.add_task(task)
+        self.uplink = Uplink(self) if uplink else None
 
     # -- output ----------------------------------------------------------------
     def say(self, now, tag, text):
@@ -268,6 +275,9 @@ class Mission:
         def on_event(ev):
             now = self.world.now()
             code = ev[0]
+            if ev[1].name == SAT:  # the buoy's Iridium link (demo.uplink)
+                self.uplink.buoy_event(now, ev)
+                return
             if code == EV_RECEIVED:
                 self._received(now, me, ev[2], ev[3], ev[4])
             elif code == EV_STATUS:
@@ -308,6 +318,8 @@ class Mission:
             self.answer = self.traffic.send(self.nodes[BUOY], DIVER, CADDY.pack([(caddy.CHAT, {"text": text})]),
                                             "answer", life, prio, True, now)
             self.say(now, "chat", "buoy -> diver %r (priority %d, acknowledged)" % (text, prio))
+            if self.uplink is not None:
+                self.uplink.relay(now, b"buoy: diver ALARM low_air, %.0f s into the mission" % (now / 1000))
         elif cls == "answer":
             self.say(now, "chat", "diver <- buoy: answer on the tablet after %.1f s" % lat)
         elif cls == "log":

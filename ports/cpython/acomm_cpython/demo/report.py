@@ -41,6 +41,8 @@ def summary(m, wall_s):
         "alarm": _alarm(m),
         "teleop": _teleop(m),
         "outage": _outage(m),
+        # the buoy's Iridium path to the shore node (demo.uplink): DirectIP both ways
+        "uplink": None if m.uplink is None else m.uplink.summary(),
         "channel": {k: getattr(m.channel, k) for k in ("sent", "collided", "deaf", "range_lost", "noise_lost")},
     }
     return out

@@ -140,7 +140,7 @@ def _demo(p, seed, minutes):
     mac = p["mac"]
     if mac not in MACS:
         raise ValueError("demo: mac is tdma, aloha or none, not %r" % (mac,))
-    m = Mission(seed=seed, minutes=minutes, mac=mac)
+    m = Mission(seed=seed, minutes=minutes, mac=mac, uplink=False)  # the sweep compares the water's MACs
     m.channel.loss = float(p["loss"])
     m.run()
     return measures(m.traffic.log, m.channel.collided, m.world.now() / 1000)

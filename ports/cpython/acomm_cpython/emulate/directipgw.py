@@ -49,14 +49,12 @@ class _MtHandler(socketserver.BaseRequestHandler):
             gw.count(e.reason)
         except OSError:
             return
-        cid, imei = 0, b"?"
         if mt is not None:
-            cid, imei = mt["client_id"], mt["imei"]
             status = gw.calls.run(gw.queue, mt)
             if status is None:
                 status = -6  # the host did not answer: resources unavailable
         try:
-            s.sendall(dip.encode_mt_confirmation(cid, imei, gw.next_auto_id(), status))
+            s.sendall(gw.confirm(mt, status))
         except OSError:
             pass
 
@@ -69,11 +67,13 @@ class DirectIpGateway(Service):
     """pump(now) on the emulator host's thread; close() at the end."""
 
     def __init__(self, net, mo_to=None, mt_listen=None, now=0, retry_ms=60000, stall_s=10.0,
-                 location=DEFAULT_LOCATION, capacity=1000):
+                 location=DEFAULT_LOCATION, capacity=1000, epoch_s=None):
+        # with neither mo_to nor mt_listen it has no thread and no socket: encode_mo() and queue()
+        # serve a caller that moves the bytes itself (the demo's uplink, on a simulated clock)
         self.mo_to = mo_to
         self.stall_s = stall_s
         self.location = location
-        self.clock = WallClock(now)
+        self.clock = WallClock(now, epoch_s)
         self.refused = {}  # MT messages refused, by reason
         self.mt_statuses = {}  # status -> count
         self._cdr = 0
@@ -89,9 +89,13 @@ class DirectIpGateway(Service):
         return self._auto
 
     def _mo(self, now, imei, serial, momsn, mtmsn, data):
+        self.outbox.put(now, self.encode_mo(now, imei, momsn, mtmsn, data))
+
+    def encode_mo(self, now, imei, momsn, mtmsn, data):
+        """One MO message of a successful session, as the gateway sends it to the shore (a new CDR
+        reference, the time of session, the location)."""
         self._cdr = (self._cdr + 1) & 0xFFFFFFFF
-        msg = dip.encode_mo(self._cdr, imei, 0, momsn, mtmsn, self.clock.epoch_s(now), data, self.location)
-        self.outbox.put(now, msg)
+        return dip.encode_mo(self._cdr, imei, 0, momsn, mtmsn, self.clock.epoch_s(now), data, self.location)
 
     def _deliver(self, msg):
         # on the outbox's thread: one MO message, one connection
@@ -104,6 +108,11 @@ class DirectIpGateway(Service):
         if ies is None:
             return "retry: closed without a confirmation"
         return None if ies[dip.MO_CONFIRMATION] == b"\x01" else "refused: MO confirmation 0"
+
+    def confirm(self, mt, status):
+        """The MT confirmation's bytes for a decoded MT message (None: one that did not parse)."""
+        cid, imei = (0, b"?") if mt is None else (mt["client_id"], mt["imei"])
+        return dip.encode_mt_confirmation(cid, imei, self.next_auto_id(), status)
 
     def queue(self, now, mt):
         # on the host's thread: the MT message into the gateway -> its status

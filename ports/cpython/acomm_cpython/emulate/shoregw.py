@@ -93,10 +93,11 @@ class HostCalls:
 
 
 class WallClock:
-    """The emulator's ticks -> UTC seconds (the time of session the gateway reports)."""
+    """The emulator's ticks -> UTC seconds (the time of session the gateway reports); epoch_s:
+    the UTC seconds at ticks `now` (default: the host's clock, so a replayed run may fix it)."""
 
-    def __init__(self, now=0):
-        self.t0 = time.time()
+    def __init__(self, now=0, epoch_s=None):
+        self.t0 = time.time() if epoch_s is None else epoch_s
         self.now0 = now
 
     def epoch_s(self, now):

@@ -111,15 +111,10 @@ class DirectIpShorePort:
         except dip.DirectIpError as e:
             self._refuse(sock, e.reason)
             return
-        key = (mo["imei"], mo["momsn"])
-        if self.seen.seen(key):
-            self.stats["mo_again"] += 1
-        elif not self.driver.deliver(now, mo["imei"], mo["payload"]):
-            self._refuse(sock, "foreign IMEI")
+        why = take_mo(self.driver, self.seen, self.stats, now, mo)
+        if why is not None:
+            self._refuse(sock, why)
             return
-        else:
-            self.seen.add(key)
-            self.stats["mo_taken"] += 1
         self._close(sock, dip.encode_mo_confirmation(True))
 
     def _refuse(self, sock, reason, answer=True):
@@ -147,20 +142,42 @@ class DirectIpShorePort:
         self._client_id = (self._client_id + 1) & 0xFFFFFFFF
         cid = self._client_id
         ies = exchange(self.mt, dip.encode_mt(cid, imei, data), dip.MT_CONFIRMATION, self.mt_timeout_s)
-        if ies is None:
-            return "the gateway closed without a confirmation"
-        got_cid, _, _, status = dip.decode_mt_confirmation(ies)
-        if got_cid != cid:
-            return "a confirmation for another message"
-        if status >= 1:
-            return None
-        return "DirectIP status %d: %s" % (status, dip.MT_ERRORS.get(status, "no payload" if status == 0 else "?"))
+        return mt_refusal(cid, ies)
 
     def close(self, now=0):
         for sock in list(self._conns):
             self._close(sock, b"")
         self.listener.close()
         self.worker.close()
+
+
+def take_mo(driver, seen, stats, now, mo):
+    """A decoded MO message (directip.decode_mo) for the driver -> None when it is ours (confirm
+    with 1), else the refusal's reason (confirm with 0). The same IMEI and MOMSN again (its
+    confirmation was lost) is ours without a second delivery (stats["mo_again"]); seen: a
+    shore.seen.Replays; stats counts mo_taken and mo_again."""
+    key = (mo["imei"], mo["momsn"])
+    if seen.seen(key):
+        stats["mo_again"] += 1
+        return None
+    if not driver.deliver(now, mo["imei"], mo["payload"]):
+        return "foreign IMEI"
+    seen.add(key)
+    stats["mo_taken"] += 1
+    return None
+
+
+def mt_refusal(cid, ies):
+    """The gateway's answer to MT message cid (the IEs of its MT confirmation, None when it
+    closed without one) -> None when the message is queued, else why not (for ShoreDriver.sent)."""
+    if ies is None:
+        return "the gateway closed without a confirmation"
+    got_cid, _, _, status = dip.decode_mt_confirmation(ies)
+    if got_cid != cid:
+        return "a confirmation for another message"
+    if status >= 1:
+        return None
+    return "DirectIP status %d: %s" % (status, dip.MT_ERRORS.get(status, "no payload" if status == 0 else "?"))
 
 
 def exchange(addr, msg, answer_iei, timeout_s):

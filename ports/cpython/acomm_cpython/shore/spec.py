@@ -19,6 +19,9 @@ from ..modems import ModemSpecError, hostport
 from .driver import ShoreDriver
 
 SERVICES = ("directip", "rockblock")
+# a shore link's defaults, as the buoy's satellite link: adverts once an hour (each costs a
+# message), and two minutes for an ACK that comes back through a session and the gateway
+LINK_OPTIONS = {"medium": "satellite", "advert_period_ms": 3600000, "ack_timeout_ms": 120000}
 _KEYS = {"directip": ("mt", "imei", "gateway"), "rockblock": ("mt", "credentials", "key", "imei", "max_age")}
 
 
@@ -69,9 +72,8 @@ def add_shore_link(node, text, name="satellite", **link_options):
         except ValueError:
             raise ModemSpecError("--iridium %r: max_age wants seconds" % text) from None
         port = RockblockShorePort(driver, listen, key, mt_url=mt_url, credentials=creds, max_age_s=max_age)
-    link_options.setdefault("medium", "satellite")
-    link_options.setdefault("advert_period_ms", 3600000)
-    link_options.setdefault("ack_timeout_ms", 120000)
+    for k, v in LINK_OPTIONS.items():
+        link_options.setdefault(k, v)
     try:
         link = node.add_link(name, driver, port, **link_options)
     except BaseException:
