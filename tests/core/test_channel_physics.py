@@ -7,11 +7,11 @@
 # Pure arithmetic: runs on CPython and on the MicroPython unix port.
 import math
 
-from acomm.compat import ticks_add, ticks_diff
 from acomm_sim import acoustics as ac
 from acomm_sim import detection as det
 from acomm_sim import linkbudget as lb
 from acomm_sim.channel import Channel
+from acomm_sim.linktrial import capture_trial, link_trial, listen
 from acomm_sim.multipath import images, late_echo_ratio
 from acomm_sim.physchannel import PhysicsChannel
 from acomm_sim.site import Site, parse
@@ -102,49 +102,14 @@ def test_link_pdr_falls_with_range_wind_and_echoes():
     assert lb.link_pdr(river, "fhss", 85, 14) > 0.9
 
 
-class Ear:
-    def __init__(self):
-        self.got = []
-
-    def receive(self, t, src, packet, distance):
-        self.got.append((t, src, packet))
-
-
-def _run(ch, t0, t1, step=10):
-    t = t0
-    while ticks_diff(t1, t) >= 0:
-        ch.poll(t)
-        t = ticks_add(t, step)
-
-
-def _capture(ch, rounds=40):
-    # 1 sends to 3 from 100 m while 2 sends from 3 km, overlapping -> what 3 got
-    ears = {}
-    for a in (1, 2, 3):
-        ears[a] = Ear()
-        ch.attach(a, ears[a])
-    ch.set_position(1, 100.0, 0.0, 10.0)
-    ch.set_position(2, 3000.0, 0.0, 10.0)
-    ch.set_position(3, 0.0, 0.0, 10.0)
-    t = 0
-    for i in range(rounds):
-        ch.transmit(t + 1900, 2, b"far-%d" % i, 1000)  # arrives 2000 ms later: overlaps the near one
-        ch.transmit(t + 3900, 1, b"near-%d" % i, 1000)
-        _run(ch, t, t + 10000, 50)
-        t += 10000
-    return ears[3].got
-
-
 def test_capture_near_packet_survives_far_one():
     site = Site(depth_m=200)
     phys = PhysicsChannel(site, modems={1: "seatrac_x150", 2: "seatrac_x150", 3: "seatrac_x150"}, seed=3)
-    got = _capture(phys)
-    near = [p for _, s, p in got if s == 1]
-    assert len(near) >= 38  # the near one is captured
-    assert phys.interfered <= 2 * 40
+    near, far = capture_trial(phys, 100.0, 3000.0, 40)
+    assert near >= 0.95 and far < 0.1  # the near one is captured, the far one lost
+    assert phys.interfered >= 36
     curve = Channel(seed=3, loss_curve=((0, 0.0), (5000, 0.0)))
-    got = _capture(curve)
-    assert not [p for _, s, p in got if s == 1]  # the curve model: both lost
+    assert capture_trial(curve, 100.0, 3000.0, 40) == (0.0, 0.0)  # the curve model: both lost
     assert curve.collided == 80
 
 
@@ -154,30 +119,18 @@ def test_bytes_damaged_for_byte_modems_dropped_for_crc_modems():
     d = lb.range_at(site, "bpsk", 0.3, 40)
     for name, crc in (("bpsk", False), ("whoi_mm_fsk", True)):
         ch = PhysicsChannel(site, modems={1: name, 2: name}, seed=5)
-        ears = {1: Ear(), 2: Ear()}
-        ch.attach(1, ears[1])
-        ch.attach(2, ears[2])
-        ch.set_position(1, 0.0, 0.0, 10.0)
-        ch.set_position(2, lb.range_at(site, name, 0.3, 40), 0.0, 10.0)
-        pkt = b"x" * 40
-        for i in range(30):
-            ch.transmit(i * 20000, 1, pkt, 1000)
-            _run(ch, i * 20000, i * 20000 + 19000, 100)
-        got = [p for _, _, p in ears[2].got]
-        assert got, name
+        pdr = link_trial(ch, lb.range_at(site, name, 0.3, 40), 30, b"x" * 40, (10.0, 10.0))
+        assert 0 < pdr < 0.9, (name, pdr)
         if crc:
-            assert all(p == pkt for p in got) and ch.range_lost > 0
+            assert ch.damaged == 0 and ch.range_lost > 0
         else:
-            assert any(p != pkt for p in got) and ch.damaged > 0
+            assert ch.damaged > 0
     assert d > 100
 
 
 def test_moving_a_node_recomputes_its_pairs():
     ch = PhysicsChannel(Site(), seed=1)
-    ch.attach(1, Ear())
-    ch.attach(2, Ear())
-    ch.set_position(1, 0.0, 0.0, 10.0)
-    ch.set_position(2, 500.0, 0.0, 10.0)
+    listen(ch, {1: (0.0, 0.0, 10.0), 2: (500.0, 0.0, 10.0)})
     near = ch.snr_db(1, 2)
     ch.set_position(2, 5000.0, 0.0, 10.0)
     assert ch.snr_db(1, 2) < near - 15

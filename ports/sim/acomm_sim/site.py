@@ -24,6 +24,21 @@ DEFAULTS = {
     "node_depth_m": 10.0,  # depth of a node given no position
 }
 
+# Named sites (Site.preset): the conditions the channel bench states its
+# figures in. "datasheet": open water deep enough that its echoes do not
+# matter, a moderate wind, middling shipping (datasheets do not say theirs);
+# "piovego": seed 004's river trial (Piovego canal, Padova): 1.5-2 m deep
+# (1.75 taken), transducers at about 1 m, fresh water; its temperature,
+# wind and shipping are assumed, and its bottom loss per reflection is the
+# one free figure, fitted so that the BPSK profile's PDR at 85 m is the
+# mean of the seed's two trials (92.7 %; docs/simulator.md).
+PRESETS = {
+    "datasheet": {"depth_m": 1000.0, "wind_mps": 5.0, "shipping": 0.5, "node_depth_m": 10.0},
+    "piovego": {"depth_m": 1.75, "temperature_c": 15.0, "salinity_psu": 0.3, "ph": 7.5, "absorption": "fg",
+                "wind_mps": 2.0, "shipping": 0.5, "node_depth_m": 1.0, "surface_loss_db": 0.5,
+                "bottom_loss_db": 1.25, "max_bounces": 40},
+}
+
 
 class Site:
     """The water and weather of a physics channel: attributes named as in
@@ -41,6 +56,13 @@ class Site:
         if self.depth_m <= 0:
             raise ValueError("depth_m must be positive")
         self.max_bounces = int(self.max_bounces)
+
+    @staticmethod
+    def preset(name, **kw):
+        """The named site of PRESETS, with some parameters changed."""
+        d = dict(PRESETS[name])
+        d.update(kw)
+        return Site(**d)
 
     def as_dict(self):
         """The parameters as a dict (DEFAULTS' keys)."""

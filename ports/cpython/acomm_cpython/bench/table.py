@@ -57,6 +57,9 @@ BENCHES = {
     # a buoy's packets to a shore server with no modem and commands back,
     # through the emulated Iridium gateway's DirectIP and RockBLOCK services
     "surface": "surface_workload",
+    # the physics channel (issue 39): absorption, noise, each modem's range,
+    # seed 004's trials, capture, and its cost against the curve model
+    "channel": "channel_workload",
 }
 NOT_IN_ALL = ("compare", "soak", "attack", "sweep", "board", "routing")
 
