@@ -26,9 +26,20 @@ def add_arguments(p):
     p.add_argument("--speed", type=float, metavar="X", help="with --web: X times real time (default 10)")
     p.add_argument("--web-password-file", metavar="PATH", help="with --web: the console's password, in a file")
     p.add_argument("--linger", action="store_true", help="with --web: keep serving after the mission, until Ctrl-C")
+    p.add_argument("--site", metavar="FILE", help="a scenario file (JSON; TOML on Python 3.11+): the water, weather and "
+                   "modem models of a physics channel instead of the loss curve (docs/simulator.md)")
 
 
 def main(args):
+    scenario = None
+    if getattr(args, "site", None):
+        from acomm_sim.site import load
+
+        try:
+            scenario = load(args.site)
+        except (OSError, ValueError, KeyError) as e:
+            print("acomm demo: --site %s: %s" % (args.site, e))
+            return 2
     if args.minutes <= 0:
         print("acomm demo: --minutes must be positive")
         return 2
@@ -40,8 +51,8 @@ def main(args):
         return 2
     say = None if args.json else print
     if args.mission == "relay":
-        if args.web is not None:
-            print("acomm demo: --web goes with the caddy mission")
+        if args.web is not None or scenario is not None:
+            print("acomm demo: --web and --site go with the caddy mission")
             return 2
         from ..demo import relay
 
@@ -60,14 +71,14 @@ def main(args):
         print()
     t0 = time.perf_counter()
     if args.web is None:
-        m = Mission(seed=args.seed, minutes=args.minutes, say=say).run()
+        m = Mission(seed=args.seed, minutes=args.minutes, say=say, scenario=scenario).run()
         web = None
     else:
         from acomm.errors import AcommError
 
         from ..demo.web import USBL_NOISE, WebDemo
 
-        m = Mission(seed=args.seed, minutes=args.minutes, say=say, usbl_noise=USBL_NOISE)
+        m = Mission(seed=args.seed, minutes=args.minutes, say=say, usbl_noise=USBL_NOISE, scenario=scenario)
         try:
             web = WebDemo(args, m)
         except ImportError as e:

@@ -69,7 +69,8 @@ def _fmt(ms):
 
 
 class Mission:
-    def __init__(self, seed=1, minutes=20, say=None, caddy_phase=True, usbl_noise=None, mac="tdma", uplink=True):
+    def __init__(self, seed=1, minutes=20, say=None, caddy_phase=True, usbl_noise=None, mac="tdma", uplink=True,
+                 scenario=None):
         # usbl_noise: (range m, bearing degrees), the largest error of the
         # X150s' fixes (uniform); None: exact fixes, as the figures assume.
         # mac: the channel access wherever the plan sets a schedule: "tdma"
@@ -83,7 +84,9 @@ class Mission:
         self.end_ms = int(minutes * 60000)
         self.timeline = []  # (ms, tag, text)
         self._say = say
-        self.channel = Channel(seed=seed, loss_curve=LOSS_CURVE)
+        # scenario: an acomm_sim.site.Scenario (acomm demo --site FILE): its
+        # physics channel instead of the loss curve, its nodes' modem models
+        self.channel = Channel(seed=seed, loss_curve=LOSS_CURVE) if scenario is None else _physics(scenario, seed)
         self.world = w = World(seed=seed, channel=self.channel)
         self.traffic = Traffic(LINK)
         self.nodes = {}
@@ -351,3 +354,17 @@ class Mission:
 
 def _clip(v):
     return max(-51.1, min(51.2, v))
+
+
+def _physics(scenario, seed):
+    # the scenario's channel for the demo's three nodes: its site, and the
+    # physics modem model of each node it names (the node's places stay the plan's)
+    if scenario.channel == "curve":
+        return Channel(seed=seed, loss_curve=LOSS_CURVE)
+    from acomm_sim.physchannel import PhysicsChannel
+
+    ch = PhysicsChannel(scenario.site, seed=seed)
+    for n in scenario.nodes:
+        if n.get("model") and n["name"] in ADDR:
+            ch.set_modem(ADDR[n["name"]], n["model"])
+    return ch
