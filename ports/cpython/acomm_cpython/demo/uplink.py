@@ -164,13 +164,8 @@ class Uplink:
             self.m.say(now, "uplink", "buoy <- shore %r after %.1f s: the MT message came in its %s session%s"
                        % (ev[4].decode(), (now - self.command[1]) / 1000, cmd,
                           " (the answer to the gateway's ring alert)" if cmd.endswith("SBDIXA") else ""))
-        elif code == EV_STATUS and self.report is not None and ev[2] == self.report[0] and is_final(ev[3]):
-            if ev[3] == DELIVERED:
-                self.report[3] = now
-                self.m.say(now, "uplink", "buoy: shore acknowledged the alarm report after %.1f s (its ACK came "
-                           "back as an MT message)" % ((now - self.report[1]) / 1000))
-            else:
-                self.m.say(now, "uplink", "buoy: the alarm report %s %s" % (STATUS_NAMES[ev[3]], ev[4]))
+        elif code == EV_STATUS:
+            self._final(now, ev, self.report, "uplink", BUOY, SHORE, "alarm report", "back as an MT message")
         elif code == EV_AVAILABILITY:
             self._heard(now, BUOY, ev)
 
@@ -185,15 +180,21 @@ class Uplink:
             rid = self.node.send(SAT, BUOY, COMMAND, 3600, 1, True, now=now)
             self.command = [rid, now, None, None, None]
             self.m.say(now, "shore", "shore -> buoy %r as an MT message (acknowledged)" % COMMAND.decode())
-        elif code == EV_STATUS and self.command is not None and ev[2] == self.command[0] and is_final(ev[3]):
-            if ev[3] == DELIVERED:
-                self.command[3] = now
-                self.m.say(now, "shore", "shore: the buoy acknowledged the command after %.1f s (its ACK came "
-                           "by DirectIP)" % ((now - self.command[1]) / 1000))
-            else:
-                self.m.say(now, "shore", "shore: the command %s %s" % (STATUS_NAMES[ev[3]], ev[4]))
+        elif code == EV_STATUS:
+            self._final(now, ev, self.command, "shore", SHORE, "the " + BUOY, "command", "by DirectIP")
         elif code == EV_AVAILABILITY:
             self._heard(now, SHORE, ev)
+
+    def _final(self, now, ev, req, tag, me, other, what, way):
+        # me's request req ([rid, sent, arrived, acknowledged, ...]) ends with EV_STATUS ev
+        if req is None or ev[2] != req[0] or not is_final(ev[3]):
+            return
+        if ev[3] == DELIVERED:
+            req[3] = now
+            self.m.say(now, tag, "%s: %s acknowledged the %s after %.1f s (its ACK came %s)"
+                       % (me, other, what, (now - req[1]) / 1000, way))
+        else:
+            self.m.say(now, tag, "%s: the %s %s %s" % (me, what, STATUS_NAMES[ev[3]], ev[4]))
 
     def _heard(self, now, me, ev):
         if ev[3] == AVAILABLE and me not in self.heard:
