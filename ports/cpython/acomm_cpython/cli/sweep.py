@@ -23,12 +23,17 @@ def add_arguments(p):
     p.add_argument("--resume", action="store_true", help="skip the runs already in the CSV")
     p.add_argument("--no-plots", action="store_true", help="do not draw the plots")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--site", metavar="FILE", help="a scenario file (JSON; TOML on Python 3.11+): demo and grid run on "
+                   "its physics channel, and --grid may sweep %s" % ", ".join(sc.SITE_PARAMS))
 
 
 def main(args):
+    site = None
     try:
-        grid = parse_grid(args.scenario, args.grid)
-    except ValueError as e:
+        if args.site:
+            site = _site(args.site)
+        grid = parse_grid(args.scenario, args.grid, site is not None)
+    except (OSError, ValueError) as e:
         print("acomm sweep: %s" % e, file=sys.stderr)
         return 2
     if args.seeds < 1 or args.minutes <= 0:
@@ -36,7 +41,7 @@ def main(args):
         return 2
     try:
         rows, paths = sweep(args.scenario, grid, args.seeds, args.minutes, args.out, args.workers, args.scheduler,
-                            args.resume, not args.no_plots, args.quiet)
+                            args.resume, not args.no_plots, args.quiet, site)
     except (RuntimeError, ValueError) as e:
         print("acomm sweep: %s" % e, file=sys.stderr)
         return 1
@@ -49,3 +54,21 @@ def main(args):
     elif not args.no_plots:
         print("plots: none (pip install '.[plot]' for matplotlib; a sweep needs a swept parameter)")
     return 0
+
+
+def _site(path):
+    # the scenario file's content, checked (acomm_sim.site), as the runs take it
+    import json
+
+    from acomm_sim.site import parse
+
+    if path.endswith(".toml"):
+        import tomllib  # Python 3.11+
+
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    else:
+        with open(path) as f:
+            data = json.load(f)
+    parse(data)
+    return data

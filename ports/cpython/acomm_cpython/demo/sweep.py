@@ -31,15 +31,16 @@ KEY = ("scenario", "seed", "minutes")
 TAIL = ("status",) + sc.MEASURES + ("error",)
 
 
-def parse_grid(scenario, items):
-    """['loss=0,0.1', 'mac=tdma'] -> [(name, [values])] in the order given."""
+def parse_grid(scenario, items, site=False):
+    """['loss=0,0.1', 'mac=tdma'] -> [(name, [values])] in the order given
+    (site: a scenario file is given, so its site parameters may be swept too)."""
     out = []
     for item in items:
         name, eq, vals = item.partition("=")
         name = name.strip()
         if not eq or not vals:
             raise ValueError("--grid %r: write NAME=V1,V2,..." % item)
-        if name not in sc.SCENARIOS[scenario]:
+        if name not in sc.SCENARIOS[scenario] and not (site and name in sc.SITE_PARAMS):
             raise ValueError("--grid %s: %s has the parameters %s" % (name, scenario, ", ".join(sc.SCENARIOS[scenario])))
         if any(n == name for n, _ in out):
             raise ValueError("--grid %s given twice" % name)
@@ -47,13 +48,15 @@ def parse_grid(scenario, items):
     return out
 
 
-def plan(scenario, grid, seeds, minutes):
-    """Every run of the sweep: [(scenario, {param: value}, seed, minutes)], in CSV order."""
+def plan(scenario, grid, seeds, minutes, base=None):
+    """Every run of the sweep: [(scenario, {param: value}, seed, minutes)], in
+    CSV order (base: parameters every run has, not swept: the site file)."""
     names = [n for n, _ in grid]
     minutes = float(minutes)
     runs = []
     for combo in itertools.product(*[v for _, v in grid]):
-        params = dict(zip(names, combo))
+        params = dict(base or {})
+        params.update(zip(names, combo))
         for seed in range(1, seeds + 1):
             runs.append((scenario, params, seed, minutes))
     return runs
@@ -62,7 +65,7 @@ def plan(scenario, grid, seeds, minutes):
 def one_run(scenario, params, seed, minutes):
     """Runs one point (in any process) -> its CSV row as a dict; never raises."""
     row = {"scenario": scenario, "seed": seed, "minutes": minutes}
-    row.update(params)
+    row.update((k, v) for k, v in params.items() if k != "site")  # the site file is not a column
     try:
         row.update(sc.run(scenario, params, seed, minutes))
         row["status"] = "ok"
@@ -194,10 +197,12 @@ def _on_dask(runs, on_row, scheduler, workers):
             cluster.close()
 
 
-def sweep(scenario, grid, seeds, minutes, out, workers=0, scheduler=None, resume=False, plots=True, quiet=False):
-    """The whole sweep -> (rows in plan order, plot paths)."""
+def sweep(scenario, grid, seeds, minutes, out, workers=0, scheduler=None, resume=False, plots=True, quiet=False,
+          site=None):
+    """The whole sweep -> (rows in plan order, plot paths). site: a scenario
+    file's decoded content (acomm_sim.site.parse), for every run."""
     names = [n for n, _ in grid]
-    runs = plan(scenario, grid, seeds, minutes)
+    runs = plan(scenario, grid, seeds, minutes, None if site is None else {"site": site})
     order = [_key(s, p, seed, m, names) for s, p, seed, m in runs]
     os.makedirs(out, exist_ok=True)
     table = CsvRows(os.path.join(out, "sweep.csv"), names)

@@ -42,11 +42,20 @@ MEASURES = ("sent", "received", "pdr", "latency_p50_s", "latency_p90_s", "latenc
             "collisions", "goodput_Bps", "overhead")
 
 GRID_LOSS_CURVE = ((0.0, 0.02), (500.0, 0.1), (1000.0, 1.0))
+
+# With a scenario file (acomm sweep --site FILE), the demo and grid scenarios
+# run on its physics channel, and these grid parameters change its site:
+# grid name -> acomm_sim.site parameter. The file's content rides in each
+# run's parameters as "site" (a dict, so that runs stay picklable).
+SITE_PARAMS = {"wind": "wind_mps", "shipping": "shipping", "depth": "depth_m", "temperature": "temperature_c",
+               "salinity": "salinity_psu", "spreading": "spreading_k", "bottom_loss": "bottom_loss_db"}
 GRID_PAYLOAD = 20
 
 
 def parse_value(name, text, scenario):
     # a grid value of the command line in the type of the parameter's default
+    if name in SITE_PARAMS:
+        return float(text)
     default = SCENARIOS[scenario][name]
     if isinstance(default, float):
         return float(text)
@@ -59,6 +68,8 @@ def run(scenario, params, seed, minutes):
     """One run -> {measure: value} (MEASURES); raises what the run raised."""
     p = dict(SCENARIOS[scenario])
     p.update(params)
+    if p.get("site") is not None and scenario not in ("demo", "grid"):
+        raise ValueError("%s: a scenario file (--site) goes with the demo and grid scenarios" % scenario)
     if scenario == "demo":
         return _demo(p, seed, minutes)
     if scenario == "grid" and p["routing"] == "none":
@@ -140,7 +151,7 @@ def _demo(p, seed, minutes):
     mac = p["mac"]
     if mac not in MACS:
         raise ValueError("demo: mac is tdma, aloha or none, not %r" % (mac,))
-    m = Mission(seed=seed, minutes=minutes, mac=mac, uplink=False)  # the sweep compares the water's MACs
+    m = Mission(seed=seed, minutes=minutes, mac=mac, uplink=False, scenario=_scenario(p))  # the sweep compares the water's MACs
     m.channel.loss = float(p["loss"])
     m.run()
     return measures(m.traffic.log, m.channel.collided, m.world.now() / 1000)
@@ -196,7 +207,13 @@ def _grid(p, seed, minutes):
     side = 1
     while side * side < n:
         side += 1
-    ch = Channel(seed=seed, loss=float(p["loss"]), loss_curve=GRID_LOSS_CURVE)
+    sc = _scenario(p)
+    if sc is None or sc.channel == "curve":
+        ch = Channel(seed=seed, loss=float(p["loss"]), loss_curve=GRID_LOSS_CURVE)
+    else:
+        from acomm_sim.physchannel import PhysicsChannel
+
+        ch = PhysicsChannel(sc.site, seed=seed, loss=float(p["loss"]))
     w = World(seed=seed, channel=ch)
     prop = int(spacing * 1.5 * 1000 / ch.sound_speed)
     slots = [(i + 1, air + prop + 400, 200) for i in range(n)]
@@ -220,6 +237,18 @@ def _grid(p, seed, minutes):
         w.add_task(sender)
     w.run(int(minutes * 60000))
     return measures(traffic.log, ch.collided, w.now() / 1000)
+
+
+def _scenario(p):
+    # the run's scenario file (an acomm_sim.site.Scenario) with the swept
+    # site parameters applied, or None without --site
+    if p.get("site") is None:
+        return None
+    from acomm_sim.site import parse
+
+    sc = parse(p["site"])
+    sc.site = sc.site.with_(**{SITE_PARAMS[k]: float(v) for k, v in p.items() if k in SITE_PARAMS})
+    return sc
 
 
 def _listener(w, traffic, me):
