@@ -2,10 +2,11 @@
 # --site FILE` runs the mission on the file's physics channel, `acomm sweep
 # --site FILE --grid wind=...` sweeps the site's wind and the delivery falls
 # with it, a TOML file reads as its JSON twin (Python 3.11+), and a bad file
-# is refused with a message. The optional Bellhop path is not built: see
-# docs/simulator.md.
+# is refused with a message; Bellhop's transmission loss where arlpy and
+# its binary are installed (skipped, with one line, where they are not).
 import csv
 import json
+import math
 import os
 import subprocess
 import sys
@@ -64,6 +65,20 @@ def test_a_bad_site_file_is_refused(tmp_path):
     assert p.returncode == 2
 
 
-def test_bellhop_path_is_optional():
-    # the transmission loss from Bellhop (arlpy) is not built in this version
-    pytest.importorskip("arlpy", reason="arlpy not installed: the optional Bellhop path is skipped")
+def test_bellhop_transmission_loss_where_installed():
+    from acomm_cpython import bellhop
+
+    ok, why = bellhop.available()
+    if not ok:
+        pytest.skip("optional Bellhop path skipped: " + why)
+    from acomm_sim import acoustics as ac
+    from acomm_sim.physchannel import PhysicsChannel
+    from acomm_sim.site import Site
+
+    site = Site(depth_m=100)
+    tl = bellhop.transmission_loss(site)
+    ray = tl(1000, 10, 20, 25.0)
+    # within the bounds of cylindrical and spherical spreading, absorption aside
+    assert 10 * math.log10(1000) - 10 < ray < 20 * math.log10(1000) + ac.thorp_db_per_km(25) + 10
+    ch = PhysicsChannel(site, tl=tl)
+    assert ch.tl is tl

@@ -24,20 +24,25 @@ def noise_power(site, m):
     return ac.lin(ac.noise_band_db(lo, hi, site.wind_mps, site.shipping))
 
 
-def received(site, ms, mr, metres, zs, zr, alpha=None):
+def received(site, ms, mr, metres, zs, zr, alpha=None, tl=None):
     """(power uPa^2, late echo ratio) of a packet from a modem of model ms at
     depth zs to one of model mr at depth zr, metres apart (straight line):
     the source level less spreading and absorption at the sender's centre
-    frequency, times the share of the sender's band the receiver listens to
-    (0 when the bands do not meet); the late echoes as multipath says."""
+    frequency (or less tl(metres, zs, zr, f_khz) dB when a transmission loss
+    model is given: Bellhop's), less the receiver's implementation loss
+    (impl_loss_db, 0 unless set), times the share of the sender's band the
+    receiver listens to (0 when the bands do not meet); the late echoes as
+    multipath says."""
     lo = max(ms["band_khz"][0], mr["band_khz"][0])
     hi = min(ms["band_khz"][1], mr["band_khz"][1])
     if hi <= lo:
         return 0.0, 0.0
     share = (hi - lo) / (ms["band_khz"][1] - ms["band_khz"][0])
+    fc = (ms["band_khz"][0] + ms["band_khz"][1]) / 2
     if alpha is None:
-        alpha = absorption(site, (ms["band_khz"][0] + ms["band_khz"][1]) / 2)
-    power = ac.lin(ms["sl_db"] - ac.transmission_loss_db(metres, alpha, site.spreading_k)) * share
+        alpha = absorption(site, fc)
+    loss = ac.transmission_loss_db(metres, alpha, site.spreading_k) if tl is None else tl(metres, zs, zr, fc)
+    power = ac.lin(ms["sl_db"] - loss - mr.get("impl_loss_db", 0.0)) * share
     dz = zr - zs
     h = (metres * metres - dz * dz) ** 0.5 if metres * metres > dz * dz else 0.0
     late = late_echo_ratio(h, zs, zr, site, alpha, mr["tolerance_ms"])[0]

@@ -19,6 +19,10 @@
 #   overhead_bytes modem framing added to each packet on the air
 #   default_bytes  packet size when the emulator's packets are not bytes
 #   range_m        range the datasheet states (None: none stated)
+#   impl_loss_db   optional: how far the real receiver falls short of this
+#                  ideal one (dB taken off every arrival's power); none of
+#                  the models here sets it (channel_margin_to_datasheet_*
+#                  in `acomm bench channel` says what would match the datasheet)
 #   src            {field: source}
 
 _SEATRAC = "Blueprint Subsea SeaTrac X150 datasheet and product page (blueprintsubsea.com/seatrac)"

@@ -32,14 +32,18 @@ class PhysicsChannel(Channel):
     """Channel(...) with a physics link budget. site: a Site (defaults if
     None); modems: {address: model name} for stations whose model is not
     their emulator's (modems_db.model_of_station); move_m: how far a node
-    moves before its pairs' geometry is worked out again."""
+    moves before its pairs' geometry is worked out again; tl: a transmission
+    loss model tl(metres, zs, zr, f_khz) -> dB instead of spreading and
+    absorption (acomm_cpython.bellhop's, where arlpy and Bellhop are)."""
 
-    def __init__(self, site=None, modems=None, default_distance=100.0, loss=0.0, seed=1, now=0, move_m=5.0):
+    def __init__(self, site=None, modems=None, default_distance=100.0, loss=0.0, seed=1, now=0, move_m=5.0,
+                 tl=None):
         site = site if site is not None else Site()
         Channel.__init__(self, default_distance, loss, seed, site.sound_speed, loss_curve=None,
                          collisions=False, now=now)
         self.site = site
         self.move_m = move_m
+        self.tl = tl
         self._model = dict(modems or {})  # addr -> model name
         self._pair = {}  # (src, dst) -> (src place, dst place, received power, late echo ratio)
         self._noise = {}  # model name -> noise power in its band (uPa^2)
@@ -96,7 +100,7 @@ class PhysicsChannel(Channel):
         zs = ps[2] if ps is not None else self.site.node_depth_m
         zr = pd[2] if pd is not None else self.site.node_depth_m
         power, late = lb.received(self.site, ms, model(self.model_name(dst)), d, zs, zr,
-                                  self.absorption((ms["band_khz"][0] + ms["band_khz"][1]) / 2))
+                                  self.absorption((ms["band_khz"][0] + ms["band_khz"][1]) / 2), self.tl)
         # the last: nbits -> the chances of a copy no other overlaps (they
         # depend on the geometry only, and most copies are such)
         kept = self._pair[key] = (ps, pd, power, late, {})
