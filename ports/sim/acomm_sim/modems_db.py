@@ -33,6 +33,20 @@ _BENTHOS = "Teledyne Benthos ATM-900 series brochure (LF band 9-14 kHz); rate co
 _SEED = "seed 004 section IV-B: SuM modem, 32 kHz carrier; BPSK 1.2 kHz band, rate 1/3 FEC, 400 bit/s; FHSS 10 kHz band, rate 1/2 FEC, 192 bit/s"
 _ASSUMED = "assumed (no source available here)"
 
+
+
+def _whoi_psk(bitrate, coding_gain_db, default_bytes, code):
+    # a PSK rate of the Micro-Modem: the same band, level and detector, its own rate and code
+    return {
+        "band_khz": (22.5, 27.5), "sl_db": 185.0, "bitrate": bitrate, "modulation": "psk",
+        "coding_gain_db": coding_gain_db, "preamble_s": 0.1, "pfa": 1e-4, "crc": True, "tolerance_ms": 10.0,
+        "overhead_bytes": 0, "default_bytes": default_bytes, "range_m": None,
+        "src": {"band_khz": _WHOI, "bitrate": _WHOI_RATES, "sl_db": _ASSUMED,
+                "coding_gain_db": _ASSUMED + " (" + code + ")", "tolerance_ms": _ASSUMED + " (equaliser span)",
+                "range_m": "no range stated in the sources here"},
+    }
+
+
 MODELS = {
     "seatrac_x150": {
         "band_khz": (24.0, 32.0), "sl_db": 176.0, "bitrate": 100.0, "modulation": "dpsk", "coding_gain_db": 0.0,
@@ -59,22 +73,8 @@ MODELS = {
                 "sl_db": _ASSUMED, "coding_gain_db": _ASSUMED + " (rate 1/2 code)", "tolerance_ms": _ASSUMED,
                 "range_m": "no range stated in the sources here"},
     },
-    "whoi_mm_psk1": {
-        "band_khz": (22.5, 27.5), "sl_db": 185.0, "bitrate": 250.0, "modulation": "psk", "coding_gain_db": 6.0,
-        "preamble_s": 0.1, "pfa": 1e-4, "crc": True, "tolerance_ms": 10.0, "overhead_bytes": 0,
-        "default_bytes": 64, "range_m": None,
-        "src": {"band_khz": _WHOI, "bitrate": _WHOI_RATES, "sl_db": _ASSUMED,
-                "coding_gain_db": _ASSUMED + " (BCH 128:8)", "tolerance_ms": _ASSUMED + " (equaliser span)",
-                "range_m": "no range stated in the sources here"},
-    },
-    "whoi_mm_psk5": {
-        "band_khz": (22.5, 27.5), "sl_db": 185.0, "bitrate": 5300.0, "modulation": "psk", "coding_gain_db": 1.5,
-        "preamble_s": 0.1, "pfa": 1e-4, "crc": True, "tolerance_ms": 10.0, "overhead_bytes": 0,
-        "default_bytes": 256, "range_m": None,
-        "src": {"band_khz": _WHOI, "bitrate": _WHOI_RATES, "sl_db": _ASSUMED,
-                "coding_gain_db": _ASSUMED + " (Hamming 14:9)", "tolerance_ms": _ASSUMED,
-                "range_m": "no range stated in the sources here"},
-    },
+    "whoi_mm_psk1": _whoi_psk(250.0, 6.0, 64, "BCH 128:8"),
+    "whoi_mm_psk5": _whoi_psk(5300.0, 1.5, 256, "Hamming 14:9"),
     "benthos_atm900": {
         "band_khz": (9.0, 14.0), "sl_db": 185.0, "bitrate": 140.0, "modulation": "fsk", "coding_gain_db": 3.0,
         "preamble_s": 0.1, "pfa": 1e-4, "crc": True, "tolerance_ms": 25.0, "overhead_bytes": 0,

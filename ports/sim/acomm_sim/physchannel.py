@@ -194,26 +194,26 @@ class PhysicsChannel(Channel):
         rng = self.rng
         if rng.chance(1 - pd):
             self.undetected += 1
-            if inter_pre > 0:
-                self.interfered += 1
-                self.collided += 1
-            else:
-                self.range_lost += 1
-            return True
+            return self._lost(inter_pre > 0)
         if m["crc"]:
             if rng.chance(1 - ok):
-                if frac > 0:
-                    self.interfered += 1
-                    self.collided += 1
-                else:
-                    self.range_lost += 1
-                return True
+                return self._lost(frac > 0)
             self._byte_p = 0.0
         else:
             # the bytes go up as demodulated: each byte is damaged with the
             # chance that one of its 8 bits is wrong
             self._byte_p = 1 - det.frame_ok(ber, 8)
         return False
+
+    def _lost(self, overlapped):
+        # count a lost copy: to interference when another arrival overlapped
+        # it (also as a collision, the curve model's name), else to the noise
+        if overlapped:
+            self.interfered += 1
+            self.collided += 1
+        else:
+            self.range_lost += 1
+        return True
 
     def _damaged(self, packet):
         # one draw for "any byte damaged" (most packets), then Channel's
