@@ -11,7 +11,7 @@ from acomm_sim import acoustics as ac
 from acomm_sim import detection as det
 from acomm_sim import linkbudget as lb
 from acomm_sim.channel import Channel
-from acomm_sim.linktrial import capture_trial, link_trial, listen
+from acomm_sim.linktrial import capture_trial, link_trial, listen, run
 from acomm_sim.multipath import images, late_echo_ratio
 from acomm_sim.physchannel import PhysicsChannel
 from acomm_sim.site import Site, parse
@@ -147,3 +147,31 @@ def test_site_and_scenario_files():
         except ValueError:
             continue
         raise AssertionError(bad)
+
+
+def test_a_world_runs_on_it_and_range_decides():
+    # two BPSK nodes heard at 1 km, a third not at 20 km (its bytes come up
+    # damaged or not at all, and its link drops them)
+    from acomm.events import EV_RECEIVED
+    from acomm_sim.world import World
+
+    ch = PhysicsChannel(Site(depth_m=200), seed=2)
+    w = World(seed=2, channel=ch)
+    w.add("a", 1, "bpsk", position=(0.0, 0.0, 10.0))
+    w.add("b", 2, "bpsk", position=(1000.0, 0.0, 10.0))
+    w.add("c", 3, "bpsk", position=(20000.0, 0.0, 10.0))
+    w.run(1000)
+    w.nodes["a"].node.send("acoustic", "*", b"hello", 60, 5)
+    w.run(20000)
+    got = {n: [e for e in sn.events if e[0] == EV_RECEIVED] for n, sn in w.nodes.items()}
+    assert got["b"] and not got["c"]
+    assert ch.model_name(1) == "bpsk" and ch.snr_db(1, 3) < 0 < ch.snr_db(1, 2)
+
+
+def test_a_station_that_leaves_takes_nothing_with_it():
+    ch = PhysicsChannel(Site(), seed=1)
+    ears = listen(ch, {1: (0.0, 0.0, 10.0), 2: (300.0, 0.0, 10.0)})
+    ch.transmit(0, 1, b"bye", 500)
+    ch.detach(2)
+    run(ch, 0, 2000)
+    assert not ears[2].got and not ch._rx and ch.in_flight() == 0

@@ -119,6 +119,14 @@ class PhysicsChannel(Channel):
         self._pair = {}
         Channel.set_distance(self, a, b, metres)
 
+    def detach(self, addr):
+        # what is on its way to a station that leaves is never decided:
+        # forget its powers (poll drops those copies unheard)
+        for seq in self._bound.get(addr, {}):
+            self._rx.pop(seq, None)
+        self._done.pop(addr, None)
+        Channel.detach(self, addr)
+
     # -- the Medium hooks ------------------------------------------------------------------
     def _fly(self, now, end, src, dst, packet, d):
         power, late, clean = self.budget(src, dst, d)
