@@ -63,6 +63,8 @@ def test_a_bad_site_file_is_refused(tmp_path):
     assert p.returncode == 2 and "depht_m" in p.stderr, p.stdout + p.stderr
     p = _acomm("sweep", "--grid", "wind=1")  # without a site, wind is no parameter
     assert p.returncode == 2
+    p = _acomm("sweep", "--scenario", "chain", "--site", COASTAL)  # the routed networks have their own channel
+    assert p.returncode == 2 and "demo and grid" in p.stderr, p.stderr
 
 
 def test_bellhop_transmission_loss_where_installed():

@@ -31,6 +31,8 @@ def main(args):
     site = None
     try:
         if args.site:
+            if args.scenario not in ("demo", "grid"):
+                raise ValueError("--site goes with the demo and grid scenarios")
             site = _site(args.site)
         grid = parse_grid(args.scenario, args.grid, site is not None)
     except (OSError, ValueError) as e:
