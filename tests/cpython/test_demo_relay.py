@@ -32,5 +32,6 @@ def test_the_timeline_and_what_goes_with_the_caddy_mission_only():
     p = _demo("--minutes", "10")
     assert p.returncode == 0, p.stderr[-3000:]
     assert "route found via auv" in p.stdout and "buoy got report" in p.stdout, p.stdout[-2000:]
-    p = _demo("--web", "127.0.0.1:0")
-    assert p.returncode == 2 and "--web goes with the caddy mission" in p.stdout
+    for extra in (("--web", "127.0.0.1:0"), ("--site", "docs/sites/coastal.json")):
+        p = _demo(*extra)
+        assert p.returncode == 2 and "--web and --site go with the caddy mission" in p.stdout, (extra, p.stdout)
