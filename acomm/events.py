@@ -85,6 +85,11 @@ EV_CONTROL = const(29)
 #                                             every fragment verified
 EV_PACKET_STATUS = const(26)
 EV_PACKET = const(27)
+# (EV_RELAY_STATUS, origin_name, pid, status, reason): a packet this node took custody of as a
+# relay ended here undelivered (expired or failed). Its origin saw `transmitted` when custody
+# moved and hears nothing more, so this is the only place the loss is told (the relay's console
+# and logs; the soak counts it)
+EV_RELAY_STATUS = const(30)
 # when the node has a key (acomm.frame.auth) and a frame or packet without a valid
 # tag holds a command (acomm.link.guard): (EV_REFUSED, link or None,
 # src_name, reason); the command is not passed on

@@ -71,6 +71,7 @@ _CAP_DELIVERY = const(32)  # acomm.drivers.caps
 
 _EV_PACKET = const(27)
 _EV_REFUSED = const(28)
+_EV_RELAY_STATUS = const(30)
 _SACK_PRIORITY = const(2)
 _SACK_LIFESPAN_S = const(60)  # a SACK older than this is stale: the sender polls again
 _RX_TIMEOUT_MS = const(600000)
@@ -277,6 +278,9 @@ class Transport:
     def _status(self, p, status, reason):
         if not p.relayed:
             self._emit((_EV_PACKET_STATUS, p.pid, status, reason))
+        elif status == _EXPIRED or status == _FAILED:
+            # the origin heard `transmitted` when this node took custody: only here is it known
+            self._emit((_EV_RELAY_STATUS, self.names.name_of(p.origin), p.pid, status, reason))
 
     def _final(self, now, p, status, reason=""):
         group = p.group

@@ -6,7 +6,7 @@
 from acomm.transport import segment as sg
 from acomm.transport.arq import Outgoing, Reassembly
 from acomm.errors import DecodeError
-from acomm.events import DELIVERED, EXPIRED, QUEUED, TRANSMITTED
+from acomm.events import DELIVERED, EV_RELAY_STATUS, EXPIRED, QUEUED, TRANSMITTED
 from acomm.prng import Prng
 from acomm.transport import Transport
 from acomm.transport.memorystore import MemoryStore
@@ -44,6 +44,21 @@ def test_relay_over_two_hops_stores_and_forwards():
     assert packets(b)[0][1:] == ("diver", "buoy", data)  # the origin, not the relay
     assert statuses(a, pid)[-1] == TRANSMITTED  # custody went to the auv
     assert c.node.transport.stats["relayed"] == 1 and not packets(c)
+
+
+def test_a_relay_tells_its_own_listeners_of_a_packet_that_expired_in_its_custody():
+    # the origin hears `transmitted` when the auv takes custody, and nothing after: the buoy
+    # moves out of everyone's range, the packet's lifespan runs out at the auv, and the auv's
+    # listeners get (EV_RELAY_STATUS, origin, pid, EXPIRED, reason)
+    w, a, b, c, ta = net(relay=True)
+    pid = ta.send(w.now(), "buoy", Prng(9).bytes(60), 240, 5)
+    assert w.run(600000, until=lambda: TRANSMITTED in statuses(a, pid))
+    w.channel.set_position(1, 50000.0, 0.0, 0.0)
+    relay = lambda: [e for e in c.events if e[0] == EV_RELAY_STATUS]
+    assert w.run(600000, until=relay)
+    assert relay() == [(EV_RELAY_STATUS, "diver", pid, EXPIRED, "lifespan over")]
+    assert statuses(a, pid) == [QUEUED, TRANSMITTED] and not packets(b)
+    assert c.node.transport.stats["expired"] == 1
 
 
 def test_a_relay_forwards_the_body_as_the_origin_chose_it():

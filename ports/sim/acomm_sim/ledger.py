@@ -5,9 +5,12 @@
 #
 # Packets are numbered by the soak (seq) and carry that number in their
 # first four bytes, so a delivery names its packet; statuses name it by
-# (origin, packet id). Memory: two bits per packet ever sent (bytearrays)
-# and a dict entry only while a packet has no final status, so the ledger
-# does not grow the peak it helps to measure.
+# (origin, packet id). A packet whose origin was told `transmitted` (a relay
+# took custody) and that the relay then let expire or fail is told only at
+# the relay (EV_RELAY_STATUS): it counts as expired or failed there, not
+# lost. Memory: two bits per packet ever sent (bytearrays), a dict entry
+# only while a packet has no final status, and one per packet in a relay's
+# custody, so the ledger does not grow the peak it helps to measure.
 
 from acomm.events import DELIVERED, EXPIRED, FAILED, TRANSMITTED
 
@@ -19,10 +22,11 @@ class Ledger:
         self.flags = bytearray()
         self.final = bytearray()  # seq -> final status (0 while none)
         self.open = {}  # (origin id, pid) -> seq, until its final status
+        self.custody = {}  # (origin id, pid) -> seq, for the packets a relay took (`transmitted`)
         self._sending = None  # (origin, seq) while send() runs
         self.counts = {"accepted": 0, "refused_store_full": 0, "delivered": 0, "duplicates": 0, "corrupt": 0,
                        "status_delivered": 0, "status_expired": 0, "status_failed": 0, "extra_final": 0,
-                       "late_delivery": 0}
+                       "late_delivery": 0, "expired_at_relay": 0, "failed_at_relay": 0, "relay_unknown": 0}
 
     def begin(self, origin):
         # -> seq of the packet about to be handed to origin's send(); its
@@ -59,7 +63,18 @@ class Ledger:
         if seq is None:
             self.counts["extra_final"] += 1  # a second final status, or one for nothing sent
             return
+        if st == TRANSMITTED:
+            self.custody[(origin, pid)] = seq
         self._final(seq, st)
+
+    def relay_status(self, origin, pid, st):
+        # a relay let a packet of origin's that it took custody of expire, or failed it
+        seq = self.custody.pop((origin, pid), None)
+        if seq is None or st not in (EXPIRED, FAILED):
+            self.counts["relay_unknown"] += 1
+            return
+        self.final[seq] = st
+        self.counts["expired_at_relay" if st == EXPIRED else "failed_at_relay"] += 1
 
     def _final(self, seq, st):
         self.flags[seq] |= _F

@@ -24,7 +24,10 @@
 # Figures (acomm_sim.ledger says how packets are counted):
 #   packets_accepted       send() took it (queued)
 #   packets_lost           accepted, not delivered, not reported expired or
-#                          failed (target 0)
+#                          failed, at its origin or at the relay that had it
+#                          in custody (target 0)
+#   packets_expired_at_relay, packets_failed_at_relay: of those reported, the
+#                          ones only their relay could report (EV_RELAY_STATUS)
 #   duplicates_delivered   deliveries to an application beyond the first (0)
 #   peak_memory_bytes      tracemalloc's peak over the whole run: the whole
 #                          process's Python allocations, the three nodes,
@@ -40,7 +43,7 @@ import time
 import tracemalloc
 
 from acomm.errors import AcommError
-from acomm.events import EV_PACKET, EV_PACKET_STATUS
+from acomm.events import EV_PACKET, EV_PACKET_STATUS, EV_RELAY_STATUS
 from acomm.drivers.mac import MacDriver, Tdma
 from acomm.node import Node
 from acomm.prng import Prng
@@ -156,6 +159,8 @@ class Soak:
             code = ev[0]
             if code == EV_PACKET_STATUS:
                 led.status(me, ev[1], ev[2])
+            elif code == EV_RELAY_STATUS:
+                led.relay_status(ADDR.get(ev[1], -1), ev[2], ev[3])
             elif code == EV_PACKET:
                 data = ev[3]
                 if ev[2] != name or len(data) < 4:
@@ -272,6 +277,9 @@ class Soak:
             "packets_delivered": c["delivered"],
             "packets_expired": c["status_expired"],
             "packets_failed": c["status_failed"],
+            "packets_expired_at_relay": c["expired_at_relay"],
+            "packets_failed_at_relay": c["failed_at_relay"],
+            "relay_statuses_unknown": c["relay_unknown"],
             "packets_corrupt": c["corrupt"],
             "extra_final_statuses": c["extra_final"],
             "packets_pending_at_end": self.ledger.pending(),
