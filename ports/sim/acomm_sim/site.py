@@ -103,12 +103,18 @@ def parse(data):
     return Scenario(Site(**data.get("site", {})), data.get("channel", "physics"), nodes)
 
 
-def load(path):
-    """The Scenario in the file at `path` (.json; .toml on CPython 3.11+)."""
+def read(path):
+    """The decoded content of the scenario file at `path` (.json; .toml on
+    CPython 3.11+), unchecked (parse checks it)."""
     if path.endswith(".toml"):
         import tomllib  # CPython 3.11+ only; the JSON form works everywhere
 
         with open(path, "rb") as f:
-            return parse(tomllib.load(f))
+            return tomllib.load(f)
     with open(path) as f:
-        return parse(json.load(f))
+        return json.load(f)
+
+
+def load(path):
+    """The Scenario in the file at `path` (.json; .toml on CPython 3.11+)."""
+    return parse(read(path))

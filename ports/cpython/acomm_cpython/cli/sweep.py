@@ -60,17 +60,8 @@ def main(args):
 
 def _site(path):
     # the scenario file's content, checked (acomm_sim.site), as the runs take it
-    import json
+    from acomm_sim.site import parse, read
 
-    from acomm_sim.site import parse
-
-    if path.endswith(".toml"):
-        import tomllib  # Python 3.11+
-
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    else:
-        with open(path) as f:
-            data = json.load(f)
+    data = read(path)
     parse(data)
     return data
