@@ -17,7 +17,7 @@ from urllib.parse import urlsplit
 
 from . import rockblock as rb
 from .seen import Replays
-from .worker import Worker, pump_mt
+from .worker import Worker, drain, pump_mt
 
 _INBOX = 64  # MO messages taken but not yet handed to the driver
 
@@ -131,11 +131,7 @@ class RockblockShorePort:
         return 200
 
     def pump(self, now):
-        try:
-            while self._rx.recv(4096):
-                pass
-        except OSError:
-            pass
+        drain(self._rx)
         with self._lock:
             inbox, self._inbox = self._inbox, []
         for mo in inbox:

@@ -31,11 +31,7 @@ class Worker:
 
     def results(self):
         """[(tag, fn's return value or the exception it raised)] since the last call."""
-        try:
-            while self._rx.recv(4096):
-                pass
-        except (BlockingIOError, OSError):
-            pass
+        drain(self._rx)
         out = []
         while True:
             try:
@@ -70,6 +66,15 @@ class Worker:
         self._thread.join(2)
         self._rx.close()
         self._tx.close()
+
+
+def drain(sock):
+    """Reads a non-blocking wake-up socket empty (its bytes only say "look")."""
+    try:
+        while sock.recv(4096):
+            pass
+    except OSError:  # BlockingIOError included: nothing more
+        pass
 
 
 def pump_mt(driver, worker, now, stats):
