@@ -91,9 +91,9 @@ def build_node(name: str, node_id: int, modems: Sequence[str] = (), udp: Optiona
             ports[lname] = stream
             watches.append((lname, watch))
         for i, spec in enumerate(iridium):
-            from .shore.spec import add_shore_link
+            from .shore.spec import add_shore_link, link_name
 
-            lname = "satellite" if i == 0 else "satellite%d" % (i + 1)
+            lname = link_name(i)
             _, port = add_shore_link(core, spec, lname, **lopts)
             closers.append(port)
             ports[lname] = port

@@ -102,12 +102,12 @@ def _ip_links(args, node, out):
         ports.append(port)
         out.emit({"event": "listening", "link": name, "text": "tcp connecting to %s:%d" % (host, p)})
     for i, spec in enumerate(args.iridium):
-        from ..shore.spec import add_shore_link
+        from ..shore.spec import add_shore_link, link_name
 
         opts = {}
         if args.advert_period is not None:
             opts["advert_period_ms"] = int(args.advert_period * 1000)
-        name = "satellite" if i == 0 else "satellite%d" % (i + 1)
+        name = link_name(i)
         link, port = add_shore_link(node, spec, name, **opts)
         ports.append(port)
         out.emit({"event": "listening", "link": name, "text": "%s listening on %s:%d" % ((spec.split(":")[0],) + tuple(port.address[:2]))})

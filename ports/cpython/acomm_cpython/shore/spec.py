@@ -50,6 +50,11 @@ def parse_spec(text):
     return service, listen, opts
 
 
+def link_name(i):
+    """The name of the i-th --iridium link (from 0): "satellite", then "satellite2", ..."""
+    return "satellite" if i == 0 else "satellite%d" % (i + 1)
+
+
 def add_shore_link(node, text, name="satellite", **link_options):
     """Adds a shore link to node for an --iridium text -> (link, port). ModemSpecError for a bad text,
     AcommError for a key or credentials file that cannot be used, OSError when the listener cannot bind."""
