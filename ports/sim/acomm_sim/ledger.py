@@ -9,8 +9,10 @@
 # took custody) and that the relay then let expire or fail is told only at
 # the relay (EV_RELAY_STATUS): it counts as expired or failed there, not
 # lost. Memory: two bits per packet ever sent (bytearrays), a dict entry
-# only while a packet has no final status, and one per packet in a relay's
-# custody, so the ledger does not grow the peak it helps to measure.
+# while a packet has no final status, and one for each packet that went
+# into a relay's custody, kept until a relay reports it (a delivery names
+# the packet by its seq, not its key): tens a day in the soak, so the
+# ledger does not grow the peak it helps to measure.
 
 from acomm.events import DELIVERED, EXPIRED, FAILED, TRANSMITTED
 
