@@ -159,7 +159,9 @@ class PhysicsChannel(Channel):
         # this one's end less the longest airtime yet overlaps nothing to come
         while done and ticks_diff(end, done[0][1]) > self._longest:
             done.pop(0)
-        others = [(x[0], x[1], x[2]) for x in done]
+        # the others: the arrivals that ended (done, as it was before this
+        # one), then those still on their way to dst
+        others = list(done)
         for o in self._bound.get(dst, {}).values():
             if o[1] != seq:
                 p = self._rx.get(o[1])
@@ -169,7 +171,8 @@ class PhysicsChannel(Channel):
         if self._in_burst(dst, start, end):
             self.noise_lost += 1
             return True
-        m = model(self.model_name(dst))
+        name = self.model_name(dst)
+        m = model(name)
         pre_end = ticks_add(start, int(m["preamble_s"] * 1000))
         frac = 0.0  # the largest share of this copy that another overlaps
         inter = 0.0  # interference power, weighted by overlap
@@ -184,7 +187,7 @@ class PhysicsChannel(Channel):
             inter += p * f
             if _overlap(start, pre_end, s, e) > 0:
                 inter_pre += p
-        noise = self.noise_power(self.model_name(dst)) + power * late
+        noise = self.noise_power(name) + power * late
         thr = self._thr.get(m["pfa"])
         if thr is None:
             thr = self._thr[m["pfa"]] = det.q_inv(m["pfa"])
