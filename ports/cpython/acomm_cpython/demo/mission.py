@@ -86,7 +86,7 @@ class Mission:
         self._say = say
         # scenario: an acomm_sim.site.Scenario (acomm demo --site FILE): its
         # physics channel instead of the loss curve, its nodes' modem models
-        self.channel = Channel(seed=seed, loss_curve=LOSS_CURVE) if scenario is None else _physics(scenario, seed)
+        self.channel = _channel(scenario, seed)
         self.world = w = World(seed=seed, channel=self.channel)
         self.traffic = Traffic(LINK)
         self.nodes = {}
@@ -356,10 +356,11 @@ def _clip(v):
     return max(-51.1, min(51.2, v))
 
 
-def _physics(scenario, seed):
-    # the scenario's channel for the demo's three nodes: its site, and the
-    # physics modem model of each node it names (the node's places stay the plan's)
-    if scenario.channel == "curve":
+def _channel(scenario, seed):
+    # the plan's loss curve without a scenario (or with a "curve" one); else
+    # the scenario's physics channel for the demo's three nodes: its site, and
+    # the physics modem model of each node it names (the node's places stay the plan's)
+    if scenario is None or scenario.channel == "curve":
         return Channel(seed=seed, loss_curve=LOSS_CURVE)
     from acomm_sim.physchannel import PhysicsChannel
 
