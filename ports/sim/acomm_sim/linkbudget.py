@@ -18,6 +18,11 @@ def absorption(site, f_khz):
     return ac.thorp_db_per_km(f_khz)
 
 
+def centre_khz(m):
+    """The centre of modem model m's band (kHz): where its absorption is taken."""
+    return (m["band_khz"][0] + m["band_khz"][1]) / 2
+
+
 def noise_power(site, m):
     """Ambient noise in modem model m's band at the site (uPa^2, linear)."""
     lo, hi = m["band_khz"]
@@ -38,7 +43,7 @@ def received(site, ms, mr, metres, zs, zr, alpha=None, tl=None):
     if hi <= lo:
         return 0.0, 0.0
     share = (hi - lo) / (ms["band_khz"][1] - ms["band_khz"][0])
-    fc = (ms["band_khz"][0] + ms["band_khz"][1]) / 2
+    fc = centre_khz(ms)
     if alpha is None:
         alpha = absorption(site, fc)
     loss = ac.transmission_loss_db(metres, alpha, site.spreading_k) if tl is None else tl(metres, zs, zr, fc)

@@ -100,7 +100,7 @@ class PhysicsChannel(Channel):
         zs = ps[2] if ps is not None else self.site.node_depth_m
         zr = pd[2] if pd is not None else self.site.node_depth_m
         power, late = lb.received(self.site, ms, model(self.model_name(dst)), d, zs, zr,
-                                  self.absorption((ms["band_khz"][0] + ms["band_khz"][1]) / 2), self.tl)
+                                  self.absorption(lb.centre_khz(ms)), self.tl)
         # the last: nbits -> the chances of a copy no other overlaps (they
         # depend on the geometry only, and most copies are such)
         kept = self._pair[key] = (ps, pd, power, late, {})

@@ -72,7 +72,7 @@ def _ranges(emit, quick):
         emit("channel_range_pdr90_%s_m" % name, r, "m")
         if m["range_m"]:
             emit("channel_range_datasheet_%s_m" % name, m["range_m"], "m")
-            alpha = lb.absorption(site, (m["band_khz"][0] + m["band_khz"][1]) / 2)
+            alpha = lb.absorption(site, lb.centre_khz(m))
             emit("channel_margin_to_datasheet_%s_db" % name, ac.transmission_loss_db(r, alpha, site.spreading_k)
                  - ac.transmission_loss_db(m["range_m"], alpha, site.spreading_k), "dB")
     r = lb.range_at(site, "seatrac_x150")
