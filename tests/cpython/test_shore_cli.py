@@ -26,6 +26,7 @@ if not sys.platform.startswith("linux") and sys.platform != "darwin":
 from acomm.drivers.iridium import IridiumDriver  # noqa: E402
 from acomm.events import DELIVERED, EV_AVAILABILITY, EV_RECEIVED, EV_STATUS  # noqa: E402
 from acomm.node import Node  # noqa: E402
+from acomm_cpython.bench.workloads.surface_rig import write_private  # noqa: E402
 from acomm_cpython.streams import open_serial  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -74,13 +75,6 @@ def _wait_line(q, needle, seen, timeout=TIMEOUT_S):
     raise AssertionError("no %r in %s" % (needle, seen))
 
 
-def _private(path, text):
-    fd = os.open(str(path), os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
-    with os.fdopen(fd, "w") as f:
-        f.write(text)
-    return str(path)
-
-
 @pytest.mark.parametrize("service", ["directip", "rockblock"])
 def test_the_buoy_and_a_shore_node_talk_through_acomm_emulate_iridium(tmp_path, service):
     shore_port = _free_port()
@@ -89,7 +83,7 @@ def test_the_buoy_and_a_shore_node_talk_through_acomm_emulate_iridium(tmp_path, 
         emu_args = ["--directip", "127.0.0.1:%d" % shore_port, "--directip-mt", "127.0.0.1:0"]
         mt_mark = "MT DirectIP on"
     else:
-        creds = _private(tmp_path / "rock7.creds", "username=buoyteam\npassword=s3cret\n")
+        creds = write_private(str(tmp_path / "rock7.creds"), "username=buoyteam\npassword=s3cret\n")
         key = str(tmp_path / "rock7-test.pem")
         emu_args = ["--rockblock-post", "http://127.0.0.1:%d/mo" % shore_port, "--rockblock-mt", "127.0.0.1:0",
                     "--rockblock-credentials", creds, "--rockblock-public-key", key]
@@ -185,12 +179,12 @@ def test_usage_errors_say_what_is_missing_in_one_line(tmp_path):
     creds = tmp_path / "open.creds"
     creds.write_text("username=u\npassword=secret-pw\n")
     creds.chmod(0o644)
-    key = _private(tmp_path / "k.pem", public_test_pem())
+    key = write_private(str(tmp_path / "k.pem"), public_test_pem())
     p = _acomm("node", "--name", "shore", "--id", "3", "--iridium",
                "rockblock:127.0.0.1:0,key=%s,mt=http://127.0.0.1:1/,credentials=%s" % (key, creds))
     _, err = p.communicate(timeout=20)
     assert p.returncode == 1 and "too open" in err and "chmod 600" in err and "secret-pw" not in err, err
-    bad = _private(tmp_path / "bad.pem", "not a key")
+    bad = write_private(str(tmp_path / "bad.pem"), "not a key")
     p = _acomm("node", "--name", "shore", "--id", "3", "--iridium", "rockblock:127.0.0.1:0,key=%s" % bad)
     _, err = p.communicate(timeout=20)
     assert p.returncode == 1 and "not a PEM key" in err, err
