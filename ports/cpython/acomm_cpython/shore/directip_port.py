@@ -74,9 +74,7 @@ class DirectIpShorePort:
         while True:
             try:
                 sock, peer = self.listener.accept()
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError:
+            except OSError:  # none waiting (BlockingIOError), or the peer gave up already
                 return
             if self.gateways is not None and peer[0] not in self.gateways:
                 _count(self.refused, "not a gateway")
