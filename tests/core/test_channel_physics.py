@@ -175,3 +175,24 @@ def test_a_station_that_leaves_takes_nothing_with_it():
     ch.detach(2)
     run(ch, 0, 2000)
     assert not ears[2].got and not ch._rx and ch.in_flight() == 0
+
+
+def test_a_transmission_loss_model_replaces_spreading():
+    # PhysicsChannel(tl=...) (Bellhop's, where installed) decides the received
+    # power: the source level less tl's loss, asked once per pair at the
+    # sender's band centre (test_channel_site's Bellhop test only checks ch.tl)
+    from acomm_sim.modems_db import MODELS
+
+    asked = []
+
+    def tl(metres, zs, zr, f_khz):
+        asked.append((metres, zs, zr, f_khz))
+        return 60.0
+
+    m = MODELS["seatrac_x150"]
+    ch = PhysicsChannel(Site(depth_m=1000), modems={1: "seatrac_x150", 2: "seatrac_x150"}, seed=1, tl=tl)
+    listen(ch, {1: (0.0, 0.0, 10.0), 2: (3000.0, 0.0, 10.0)})
+    power = ch.budget(1, 2)[0]
+    ch.budget(1, 2)
+    assert close(ac.db(power), m["sl_db"] - 60.0 - m.get("impl_loss_db", 0.0), 1e-6)
+    assert len(asked) == 1 and close(asked[0][0], 3000.0, 1e-6) and asked[0][1:] == (10.0, 10.0, lb.centre_khz(m))
