@@ -17,13 +17,13 @@
 #   Pages: https://docs.groundcontrol.com/iot/rockblock/web-services/sending-mt-message
 #   and .../receiving-mo-message (docs/drivers-iridium.md, Conformance).
 
-import http.client
 import http.server
 import time
 from urllib.parse import urlsplit
 
 from ..shore import jwt_rs256
 from ..shore import rockblock as rb
+from ..shore.rockblock_port import post_form
 from .directipgw import DEFAULT_LOCATION
 from .rock7_testkey import PRIVATE_PEM
 from .shoregw import Service, WallClock, queue_status
@@ -91,16 +91,10 @@ class RockblockGateway(Service):
 
     def _deliver(self, fields):
         # on the outbox's thread: one MO message, one POST, signed now
-        u = self.post_url
-        conn = http.client.HTTPConnection(u.hostname, u.port, timeout=5)
         try:
-            conn.request("POST", u.path or "/", rb.mo_form(fields, self.key),
-                         {"Content-Type": "application/x-www-form-urlencoded"})
-            status = conn.getresponse().status
+            status, _ = post_form(self.post_url, rb.mo_form(fields, self.key), 5)
         except OSError as e:
             return "retry: %s" % (e.strerror or e)
-        finally:
-            conn.close()
         if status == 200:
             return None
         return ("retry: HTTP %d" if status >= 500 or status in (408, 429) else "refused: HTTP %d") % status

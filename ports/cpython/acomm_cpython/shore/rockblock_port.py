@@ -145,18 +145,9 @@ class RockblockShorePort:
         # on the worker thread: one MT message, one POST -> None or why not
         if not self.mt_url or not self.credentials:
             return "no MT service configured (mt=URL,credentials=FILE)"
-        u = urlsplit(self.mt_url)
-        cls = http.client.HTTPSConnection if u.scheme == "https" else http.client.HTTPConnection
-        conn = cls(u.hostname, u.port, timeout=20)
-        try:
-            conn.request("POST", u.path or "/", rb.mt_form(imei, self.credentials[0], self.credentials[1], data),
-                         {"Content-Type": "application/x-www-form-urlencoded"})
-            r = conn.getresponse()
-            text = r.read(512)
-        finally:
-            conn.close()
-        if r.status != 200:
-            return "HTTP %d from the MT API" % r.status
+        status, text = post_form(self.mt_url, rb.mt_form(imei, self.credentials[0], self.credentials[1], data), 20)
+        if status != 200:
+            return "HTTP %d from the MT API" % status
         ok, v = rb.parse_mt_answer(text)
         return None if ok else v
 
@@ -166,3 +157,17 @@ class RockblockShorePort:
         self._rx.close()
         self._tx.close()
         self.worker.close()
+
+
+def post_form(url, body, timeout_s):
+    """One urlencoded POST to url (text or a urlsplit result) on a connection of its own
+    (blocking) -> (HTTP status, the answer's first 512 bytes). OSError for the connection."""
+    u = urlsplit(url) if isinstance(url, str) else url
+    cls = http.client.HTTPSConnection if u.scheme == "https" else http.client.HTTPConnection
+    conn = cls(u.hostname, u.port, timeout=timeout_s)
+    try:
+        conn.request("POST", u.path or "/", body, {"Content-Type": "application/x-www-form-urlencoded"})
+        r = conn.getresponse()
+        return r.status, r.read(512)
+    finally:
+        conn.close()
