@@ -185,10 +185,10 @@ def struct_len(n):
     return n.to_bytes(2, "big")
 
 
-def _post(addr, body, headers=None, send=None):
+def _post(addr, body):
     c = http.client.HTTPConnection(addr[0], addr[1], timeout=10)
     try:
-        c.request("POST", "/mo", body, dict({"Content-Type": "application/x-www-form-urlencoded"}, **(headers or {})))
+        c.request("POST", "/mo", body, {"Content-Type": "application/x-www-form-urlencoded"})
         return c.getresponse().status
     finally:
         c.close()
