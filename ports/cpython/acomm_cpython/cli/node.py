@@ -110,7 +110,7 @@ def _ip_links(args, node, out):
         name = link_name(i)
         link, port = add_shore_link(node, spec, name, **opts)
         ports.append(port)
-        out.emit({"event": "listening", "link": name, "text": "%s listening on %s:%d" % ((spec.split(":")[0],) + tuple(port.address[:2]))})
+        out.emit({"event": "listening", "link": name, "text": "%s listening on %s:%d" % ((link.driver.service,) + tuple(port.address[:2]))})
     return ports
 
 
