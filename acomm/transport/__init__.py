@@ -33,11 +33,13 @@
 # acknowledgements out, whole packets up (or into the store, at a relay).
 # Bounds: at most _MAX_RX reassemblies at a time (a sender beyond that is
 # refused "receiver full" and tries again later), each of at most
-# max_packet bytes, dropped after _RX_TIMEOUT_MS without a fragment; the
-# last DONE_MEMORY delivered (origin, packet id) pairs, so a packet sent
-# again (its SACK was lost, or the sender restarted before it came) is
-# acknowledged and not delivered twice. They are kept in the store too
-# (acomm.transport.packetstore), so a receiver that restarts still knows them.
+# max_packet bytes, dropped after _RX_TIMEOUT_MS without a fragment; and
+# DONE_MEMORY delivered or relayed (origin, packet id) pairs, each until
+# its lifespan is over, so a packet sent again (its SACK was lost, the
+# sender restarted before it came, a relay's store kept a copy through an
+# outage) is acknowledged and not delivered twice. They are kept in the
+# store too (acomm.transport.packetstore), so a receiver that restarts
+# still knows them (docs/transport.md, "Exactly once").
 #
 # The transport is given what it uses: the node's id, name table and links
 # (a live dict: links added later are used too), an id allocator for link
@@ -151,10 +153,11 @@ class Transport:
         self._rtt = {}  # (link name, hop id) -> [smoothed poll-to-SACK time, its mean deviation], ms
         self.stats = {"sent": 0, "delivered": 0, "expired": 0, "failed": 0, "received": 0, "relayed": 0,
                       "fragments": 0, "resent": 0, "sacks": 0, "rx_bad": 0, "rx_dup": 0, "refused": 0, "refused_unauthed": 0,
-                      "store_full": 0, "failovers": 0}
+                      "store_full": 0, "failovers": 0, "done_forgotten": 0}
         self._rx = {}  # (link name, src id, lane) -> Reassembly
-        # (origin, pid) pairs delivered or relayed here lately, 3 bytes each
-        # as the store keeps them: 32 tuples in a list took 640 B of heap
+        # (origin, pid) pairs delivered or relayed here, with the minute
+        # (16 bits, wrapping) until which a copy may still come: 5 bytes each
+        # as the store keeps them (32 tuples in a list took 640 B of heap)
         self._done = bytearray()
         self._sacks = {}  # link request id -> (link, neighbour id, SACK bytes, tries)
         self._quiet = False  # the segment at hand is unsealed, strict mode: no SACK for it
@@ -272,7 +275,12 @@ class Transport:
             p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, None, s.compressed, s.medium)
             p.chunks, p.size = s.chunks, s.size
             self._queue(p)
-        self._done = bytearray(self.packets.done[-3 * _DONE_MEMORY :])
+        d = self._done = bytearray(self.packets.done[-5 * _DONE_MEMORY :])
+        for i in range(0, len(d), 5):
+            if d[i + 3] == 0xFF and d[i + 4] == 0xFF:
+                # an older store's pair, whose lifespan nobody wrote down: an hour from now
+                u = (self.wall() // 60 + 60) & 0xFFFF
+                d[i + 3], d[i + 4] = u >> 8, u & 0xFF
 
     # -- statuses --------------------------------------------------------------------
     def _status(self, p, status, reason):
@@ -721,7 +729,7 @@ class Transport:
                 if not self._keep(p):
                     return False
                 self.stats["relayed"] += 1
-                self._remember(origin, h.pid)
+                self._remember(origin, h.pid, life)
         elif self._is_done(origin, h.pid):
             self.stats["rx_dup"] += 1
         else:
@@ -734,7 +742,7 @@ class Transport:
                     data = decompress(body, self.max_packet)
                 except DecodeError:
                     return self._bad(r)
-            self._remember(origin, h.pid, False)
+            self._remember(origin, h.pid, life, False)
             names = self.names
             g = self.guard
             if g is not None and not g.admits(data, not r.unauthed, self.auth):
@@ -761,20 +769,37 @@ class Transport:
         return True
 
     def _is_done(self, origin, pid):
-        # whether (origin, pid) is among the pairs remembered: a hit must
-        # start on a pair's boundary (the pattern can straddle two pairs)
+        # whether (origin, pid) is among the entries remembered: a hit must
+        # start on an entry's boundary (the pattern can straddle two)
         d = self._done
         pat = bytes((origin, pid >> 8, pid & 0xFF))
         i = d.find(pat)
-        while i >= 0 and i % 3:
+        while i >= 0 and i % 5:
             i = d.find(pat, i + 1)
         return i >= 0
 
-    def _remember(self, origin, pid, save=True):
+    def _remember(self, origin, pid, life_s, save=True):
+        # (origin, pid) is done here; a copy can still come until its
+        # lifespan (life_s from now, as the packet says) is over. When the
+        # memory is full the entry forgotten is the one whose copies stop
+        # soonest: an expired one first (its copies are gone, relays drop
+        # them), else the earliest, counted as done_forgotten (a copy of
+        # it could then be delivered twice)
         d = self._done
-        d.extend(bytes((origin, pid >> 8, pid & 0xFF)))
-        if len(d) > 3 * _DONE_MEMORY:
-            d[0:3] = b""
+        now_min = self.wall() // 60
+        if len(d) >= 5 * _DONE_MEMORY:
+            j = 0
+            least = 0x10000
+            for i in range(0, len(d), 5):
+                left = (((d[i + 3] << 8) | d[i + 4]) - now_min) & 0xFFFF
+                left = left - 0x10000 if left & 0x8000 else left  # minutes still to run, wrap-safe
+                if left < least:
+                    j, least = i, left
+            if least > 0:
+                self.stats["done_forgotten"] += 1
+            d[j : j + 5] = b""
+        until = (now_min + (max(0, life_s) + 59) // 60 + 1) & 0xFFFF
+        d.extend(bytes((origin, pid >> 8, pid & 0xFF, until >> 8, until & 0xFF)))
         if save:
             self._save_done()
 

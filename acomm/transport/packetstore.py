@@ -36,7 +36,8 @@ from ..errors import StoreFull
 
 _HDR = const(11)
 _META = const(0xFFFFFF)
-_DONE = const(0xFFFFFE)
+_DONE = const(0xFFFFFE)  # before 5-byte entries: (origin, pid) only, read once and converted
+_DONE5 = const(0xFFFFFD)
 DONE_MEMORY = const(32)
 _PID_BLOCK = const(32)
 _REC_OVERHEAD = const(12)  # acomm.transport.store's record header and CRC
@@ -47,7 +48,7 @@ _F_MEDIUM = const(2)
 # not move the limit and no new packet id could be handed out safely.
 # The same for the delivered pairs (at their most), so that a full store
 # still remembers what it delivered.
-_META_ROOM = const(2 * (_REC_OVERHEAD + 2) + 2 * (_REC_OVERHEAD + 3 * DONE_MEMORY))
+_META_ROOM = const(2 * (_REC_OVERHEAD + 2) + 2 * (_REC_OVERHEAD + 5 * DONE_MEMORY))
 
 
 def key_of(p):
@@ -114,7 +115,7 @@ class PacketStore:
         self.chunk = min(getattr(store, "max_record", 65535), 65535)
         self.pid = 0
         self._limit = 0  # ids up to here are covered by the stored limit
-        self.done = b""  # (origin, pid) pairs delivered lately, 3 bytes each, as recover() found them
+        self.done = b""  # what recover() found: 5 bytes an entry (origin, pid, until minute), see save_done
 
     def _sizes(self, p):
         # p.size: the body's length (the body itself may be in the store only)
@@ -144,9 +145,9 @@ class PacketStore:
         return pid
 
     def save_done(self, done):
-        # done: the delivered pairs as this record holds them, 3 bytes each
-        # (origin, pid high, pid low), at most DONE_MEMORY of them
-        self.store.put(_DONE, bytes(done))  # the room for it is kept (_META_ROOM)
+        # done: the packets done here, 5 bytes each (origin, pid high, pid
+        # low, until minute high, low), at most DONE_MEMORY of them
+        self.store.put(_DONE5, bytes(done))  # the room for it is kept (_META_ROOM)
 
     def put(self, p):
         # raises StoreFull (nothing of the packet stays then)
@@ -209,14 +210,21 @@ class PacketStore:
                 m = st.get(k)
                 if m is not None and len(m) == 2:
                     self._limit = self.pid = (m[0] << 8) | m[1]
-            elif k == _DONE:
+            elif k == _DONE5:
                 m = st.get(k) or b""
-                self.done = m[: len(m) - len(m) % 3]
+                self.done = m[: len(m) - len(m) % 5]
+            elif k == _DONE:
+                # an older acomm's pairs: kept, with "until" left for the
+                # transport to fill in (0xFFFF, then the minute it starts)
+                m = st.get(k) or b""
+                if not self.done:
+                    self.done = b"".join(m[i : i + 3] + b"\xff\xff" for i in range(0, len(m) - 2, 3))
+                st.delete(k)
             elif k >> 24 == 0:
                 heads[k] = True
         out = []
         for k in keys:
-            if k == _DONE:
+            if k == _DONE or k == _DONE5:
                 continue
             if k == _META or k >> 24:
                 if k != _META and (k & 0xFFFFFF) not in heads:

@@ -325,16 +325,55 @@ def test_a_restarted_receiver_does_not_deliver_a_resent_packet_twice():
 
 
 def test_the_delivered_pairs_are_kept_as_the_store_keeps_them():
-    # 3 bytes a pair, the last 32: a pair is found only on a pair's
-    # boundary (bytes 1..3 of 01 01 02 | 03 04 05 are not a pair)
+    # 5 bytes an entry (origin, pid, the minute until which a copy can
+    # come), at most 32: an entry is found only on its boundary (bytes
+    # 1..3 of 01 01 02 xx xx | 03 ... are not an entry)
     w, a, b, _, ta = net()
-    ta._remember(1, 0x0102, False)
-    ta._remember(3, 0x0405, False)
+    ta._remember(1, 0x0102, 600, False)
+    ta._remember(3, 0x0405, 600, False)
     assert ta._is_done(1, 0x0102) and ta._is_done(3, 0x0405)
     assert not ta._is_done(1, 0x0203) and not ta._is_done(2, 0x0304)
     for k in range(40):
-        ta._remember(9, k, False)
-    assert len(ta._done) == 3 * 32 and not ta._is_done(1, 0x0102) and ta._is_done(9, 39) and not ta._is_done(9, 7)
+        ta._remember(9, k, 7200, False)
+    # full: the entries whose lifespan ends soonest went first (the two of
+    # 10 minutes, then the earliest of 2 hours), each one still alive counted
+    assert len(ta._done) == 5 * 32 and not ta._is_done(1, 0x0102) and not ta._is_done(3, 0x0405)
+    assert ta._is_done(9, 39) and ta._is_done(9, 8) and not ta._is_done(9, 7)
+    assert ta.stats["done_forgotten"] == 10
+
+
+def test_a_copy_that_comes_after_an_hour_in_a_relays_store_is_not_delivered_again():
+    # the memory keeps a packet whose copies can still come over newer
+    # packets with short lifespans: a long-lived packet is delivered, then
+    # 40 short-lived ones (more than the memory holds) arrive an hour
+    # later; the long one's copy is still known as done
+    w, a, b, _, ta = net()
+    ta._remember(4, 77, 86400, False)
+    wall0 = ta.wall
+    ta.wall = lambda: wall0() + 3600
+    for k in range(40):
+        ta._remember(5, k, 300, False)
+    assert ta._is_done(4, 77) and ta.stats["done_forgotten"] > 0
+    # once its day is over it goes like the others: forgetting it then is
+    # not counted (no copy of it can come any more)
+    forgotten = ta.stats["done_forgotten"]
+    ta.wall = lambda: wall0() + 2 * 86400
+    for k in range(32):
+        ta._remember(6, k, 300, False)
+    assert not ta._is_done(4, 77) and ta.stats["done_forgotten"] == forgotten
+
+
+def test_an_older_stores_pairs_are_read_and_kept_for_an_hour():
+    # a store written before the entries had lifespans: its 3-byte pairs
+    # come back, with an hour to run, and are written in the new form
+    from acomm.transport.memorystore import MemoryStore
+    from acomm.transport.packetstore import PacketStore
+
+    st = MemoryStore()
+    st.put(0xFFFFFE, bytes((7, 1, 2, 8, 3, 4)))
+    ps = PacketStore(st)
+    assert ps.recover() == [] and len(ps.done) == 10 and 0xFFFFFE not in st.keys()
+    assert ps.done[3:5] == b"\xff\xff"
 
 
 def test_a_lifespan_longer_than_a_link_keeps_a_request_is_still_sent():

@@ -108,7 +108,7 @@ p.body = %(body)r
 p.size = len(p.body)
 ps.put(p)
 for k in range(4):
-    ps.save_done(b''.join(bytes((%(auv)d, (100 * k + j) >> 8, (100 * k + j) & 0xFF)) for j in range(32)))
+    ps.save_done(b"".join(bytes((%(auv)d, (100 * k + j) >> 8, (100 * k + j) & 0xFF, 0xFF, 0xFF)) for j in range(32)))
 print('STORE', st.used_bytes, st.dead_bytes, len(st))
 st.close()
 print('FILLED', fill_all('more'))
