@@ -3,21 +3,33 @@
 # A packet is written here before send() returns and stays until it is
 # delivered or expires, across resets and power cuts. Interface:
 #
-#   s = Store(path, capacity_bytes=65536, max_record=1024, sync=True)
+#   s = Store(path, capacity_bytes=65536, max_record=1024, sync=True, opener=None)
 #       opens or creates the store at `path` and recovers it (below).
+#       opener(path, mode) opens its files (default: the builtin open; the
+#       tests give one that fills up or refuses). A path that cannot be
+#       written fails here with one line naming it and the cause, e.g.
+#       StoreError("store /x: read-only file system"), "permission denied";
+#       StoreFull when the filesystem has no room to create the store.
 #   s.put(key, data)   key: int 0..0xFFFFFFFF, data: bytes of at most
 #                      max_record (<= 65535). Appended, flushed and synced
 #                      before it returns; replaces an earlier record with the
 #                      same key. Raises StoreFull when it would exceed
 #                      capacity_bytes even after compaction, EncodeError for
 #                      a bad key or an over-long record.
-#                      A filesystem too full for the record (ENOSPC) is
-#                      StoreFull too: the caller refuses what it cannot keep.
+#                      A filesystem too full for the record (ENOSPC, or a
+#                      short write: FAT says so without an error) is
+#                      StoreFull too: the caller refuses what it cannot keep,
+#                      and a put() once there is room again works. Any other
+#                      failed write (EIO, a file system remounted read-only)
+#                      is a StoreError naming the store and the cause. After
+#                      a failed write the record is not in the store, then or
+#                      after a reopen (the file is cut back where it was).
 #   s.delete(key)      appends a tombstone; an unknown key is ignored. On a
 #                      filesystem too full for the tombstone the record
 #                      leaves the index at once and the file at the next
 #                      compaction that fits (counted in delete_deferred):
-#                      a reset before then brings it back.
+#                      a reset before then brings it back. The same for any
+#                      other failed write: delete() never raises for one.
 #   s.get(key)         -> bytes, or None (unknown, or found corrupt on read:
 #                      then it is dropped and counted in corrupt_dropped).
 #   s.keys()           -> live keys in the order of their last put(), which
@@ -29,7 +41,9 @@
 #                      torn_dropped, corrupt_dropped.
 #   s.compact()        rewrites the live records to path + ".tmp", syncs it
 #                      and renames it over the store. Done by itself when dead
-#                      bytes pass half the file (and 256 bytes).
+#                      bytes pass half the file (and 256 bytes); one that does
+#                      not fit leaves the store as it was (StoreFull when
+#                      called, skipped when done by itself).
 #   s.close()          (also a context manager)
 #
 # sync=True (CPython) fsyncs each record, the temporary file of a compaction
@@ -78,17 +92,16 @@ _HDR = const(8)  # sync, kind, key u32, length u16
 _OVER = const(12)  # header + CRC-32
 _MIN_DEAD = const(256)  # below this, compacting costs more than it frees
 _CHUNK = const(128)  # read buffer for recovery and compaction
-_ENOSPC = const(28)  # errno of a full filesystem (Linux, MicroPython, Windows)
+# errnos (Linux, MicroPython's littlefs and FAT; MicroPython's errno
+# module has no ENOSPC or EROFS)
+_ENOSPC = const(28)  # the filesystem is full
+_EROFS = const(30)  # read-only file system
+_EACCES = const(13)  # permission denied
 
 _fsync = getattr(os, "fsync", None)  # CPython
 _ossync = getattr(os, "sync", None)  # some MicroPython ports
 _osopen = getattr(os, "open", None)
 _replace = getattr(os, "replace", None) or os.rename
-
-
-def _no_room(e):
-    # whether OSError e says the filesystem is full
-    return bool(e.args) and e.args[0] == _ENOSPC
 
 
 def _exists(p):
@@ -97,6 +110,21 @@ def _exists(p):
         return True
     except OSError:
         return False
+
+
+def _close(f):
+    # closes f; a close that fails (its flush) changes nothing here
+    try:
+        f.close()
+    except (OSError, AttributeError):
+        pass
+
+
+def _remove(p):
+    try:
+        os.remove(p)
+    except OSError:
+        pass
 
 
 def _sync_dir(path):
@@ -119,7 +147,7 @@ def _sync_dir(path):
 
 
 class Store:
-    def __init__(self, path, capacity_bytes=65536, max_record=1024, sync=True):
+    def __init__(self, path, capacity_bytes=65536, max_record=1024, sync=True, opener=None):
         if not 0 < max_record <= _MAX_DATA:
             raise StoreError("max_record must be 1..65535")
         if capacity_bytes < len(MAGIC) + _OVER:
@@ -137,15 +165,21 @@ class Store:
         self._mv = memoryview(self._buf)
         self.used_bytes = self.live_bytes = self.dead_bytes = 0
         self._f = None
-        if _exists(self._tmp):
-            if _exists(path):
-                os.remove(self._tmp)
-            else:
-                _replace(self._tmp, path)
-        if not _exists(path):
-            self._create()
-        self._f = open(path, "r+b")
-        self._recover()
+        self._open = opener or open
+        try:
+            if _exists(self._tmp):
+                if _exists(path):
+                    os.remove(self._tmp)
+                else:
+                    _replace(self._tmp, path)
+            if not _exists(path):
+                self._create()
+            self._f = self._open(path, "r+b")
+            self._recover()
+        except OSError as e:
+            # one line for the user: which store and why, not a traceback
+            self.close()
+            raise self._err(e)
 
     # -- the interface ---------------------------------------------------
 
@@ -171,10 +205,9 @@ class Store:
         except OSError as e:
             # the capacity fits but the filesystem does not (other files,
             # a small flash): a refusal, as above, never a crash. Nothing
-            # moved: the next record overwrites what was written
-            if _no_room(e):
-                raise StoreFull("filesystem full")
-            raise
+            # moved: the next record goes where this one was
+            self._reopen()
+            raise self._err(e)
         j = self._find(key)
         if j >= 0:
             self._drop(j)
@@ -199,11 +232,11 @@ class Store:
             hdr = struct.pack("<BBIH", _SYNC, _DEL, key, 0)
             try:
                 self._append_record(hdr, b"", crc32(hdr))
-            except OSError as e:
-                if not _no_room(e):
-                    raise
-                # no room for the tombstone on the filesystem: forgotten
-                # now, gone from the file at the next compaction that fits
+            except OSError:
+                # no room for the tombstone on the filesystem (or no write
+                # at all): forgotten now, gone from the file at the next
+                # compaction that fits
+                self._reopen()
                 self._drop(j)
                 self.stats["delete_deferred"] += 1
                 return
@@ -218,10 +251,13 @@ class Store:
         if j < 0:
             return None
         off, n = struct.unpack_from("<IH", self._locs, 6 * j)
-        f.seek(off)
-        hdr = f.read(_HDR)
-        data = f.read(n)
-        tail = f.read(4)
+        try:
+            f.seek(off)
+            hdr = f.read(_HDR)
+            data = f.read(n)
+            tail = f.read(4)
+        except OSError as e:
+            raise self._err(e)
         # The file may have rotted since it was opened: check again.
         if (
             len(tail) != 4
@@ -250,9 +286,12 @@ class Store:
 
     def compact(self):
         f = self._file()
-        g = open(self._tmp, "wb")
         try:
-            g.write(MAGIC)
+            g = self._open(self._tmp, "wb")
+        except OSError as e:
+            raise self._err(e)
+        try:
+            self._write(g, MAGIC)
             pos = len(MAGIC)
             keys = bytearray()
             locs = bytearray()
@@ -270,28 +309,32 @@ class Store:
                 locs.extend(struct.pack("<IH", pos, n))
                 pos += _OVER + n
             self._flush(g)
-        except BaseException:
             g.close()
-            try:
-                os.remove(self._tmp)
-            except OSError:
-                pass
+        except BaseException as e:
+            _close(g)
+            _remove(self._tmp)
+            if isinstance(e, OSError):
+                raise self._err(e)  # the store is as it was
             raise
-        g.close()
         f.close()
         self._f = None
         try:
             _replace(self._tmp, self.path)
-            if self._sync:
-                _sync_dir(self.path)
-        finally:
-            self._f = open(self.path, "r+b")
+        except OSError as e:
+            # the old file is still the store (a rename needs room on some
+            # file systems); the copy would only take room until the next open
+            _remove(self._tmp)
+            self._reopen()
+            raise self._err(e)
+        if self._sync:
+            _sync_dir(self.path)
         self._keys = keys
         self._locs = locs
         self.used_bytes = pos
         self.live_bytes = pos - len(MAGIC)
         self.dead_bytes = 0
         self.stats["compactions"] += 1
+        self._reopen()
 
     def close(self):
         if self._f is not None:
@@ -320,10 +363,12 @@ class Store:
                 _ossync()
 
     def _create(self):
-        f = open(self.path, "wb")
-        f.write(MAGIC)
-        self._flush(f)
-        f.close()
+        f = self._open(self.path, "wb")
+        try:
+            self._write(f, MAGIC)
+            self._flush(f)
+        finally:
+            _close(f)
         if self._sync:
             _sync_dir(self.path)
 
@@ -333,11 +378,59 @@ class Store:
         # after a failed write the next record overwrites the partial one.
         f = self._f
         f.seek(self.used_bytes)
-        f.write(hdr)
-        f.write(data)
-        f.write(struct.pack("<I", crc))
+        self._write(f, hdr)
+        self._write(f, data)
+        self._write(f, struct.pack("<I", crc))
         self._flush(f)
         self.used_bytes += _OVER + len(data)
+
+    def _write(self, f, b):
+        # a short count is a full filesystem too: FAT reports it so
+        if f.write(b) != len(b):
+            raise OSError(_ENOSPC)
+
+    def _reopen(self):
+        # The store file again, after a failed write: a new file object
+        # drops what the failure left in the old one's buffer (CPython
+        # would write it at the next seek, or fail there again), and the
+        # file is cut back to its last whole record, so that the record
+        # refused stays refused after a reset (where the port cannot cut,
+        # its first byte is spoiled, as far as the filesystem lets). When
+        # even the open fails the store is closed and says so.
+        _close(self._f)
+        self._f = None
+        try:
+            f = self._open(self.path, "r+b")
+        except OSError:
+            return
+        self._f = f
+        u = self.used_bytes
+        try:
+            if hasattr(f, "truncate"):
+                f.truncate(u)
+            else:
+                # no truncate (MicroPython): a 0 over the refused record's
+                # sync byte, where the filesystem still takes one
+                f.seek(0, 2)
+                if f.tell() > u:
+                    f.seek(u)
+                    f.write(b"\0")
+                    f.flush()
+        except OSError:
+            pass
+
+    def _err(self, e):
+        # OSError e as acomm's error: one line naming the store and the cause
+        n = e.args[0] if e.args else 0
+        if n == _ENOSPC:
+            return StoreFull("store %s: filesystem full" % self.path)
+        if n == _EROFS:
+            why = "read-only file system"
+        elif n == _EACCES:
+            why = "permission denied"
+        else:
+            why = getattr(e, "strerror", None) or str(e)
+        return StoreError("store %s: %s" % (self.path, why))
 
     def _find(self, key):
         # The keys bytearray is searched in C; a hit must sit on a 4-byte
@@ -364,14 +457,12 @@ class Store:
             self._compact_if_room()
 
     def _compact_if_room(self):
-        # -> False when the filesystem has no room for the rewritten copy
-        # (compact() leaves the store as it was then); other errors raise
+        # -> False when the filesystem has no room for the rewritten copy,
+        # or takes no writes (compact() leaves the store as it was then)
         try:
             self.compact()
-        except OSError as e:
-            if _no_room(e):
-                return False
-            raise
+        except StoreError:
+            return False
         return True
 
     def _copy(self, off, n, g):
@@ -381,7 +472,7 @@ class Store:
         while n:
             k = n if n < _CHUNK else _CHUNK
             f.readinto(mv[:k])
-            g.write(mv[:k])
+            self._write(g, mv[:k])
             n -= k
 
     def _parse(self, p, size):
@@ -441,7 +532,7 @@ class Store:
             # cut while the header was being written: nothing was stored yet
             f.close()
             self._create()
-            self._f = f = open(self.path, "r+b")
+            self._f = f = self._open(self.path, "r+b")
             size = len(MAGIC)
         p = len(MAGIC)
         while p < size:

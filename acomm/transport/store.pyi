@@ -1,4 +1,4 @@
-from typing import Dict, List, Optional, Union
+from typing import Any, Callable, Dict, List, Optional, Union
 
 _BytesLike = Union[bytes, bytearray, memoryview]
 
@@ -12,7 +12,14 @@ class Store:
     used_bytes: int
     live_bytes: int
     dead_bytes: int
-    def __init__(self, path: str, capacity_bytes: int = ..., max_record: int = ..., sync: bool = ...) -> None: ...
+    def __init__(
+        self,
+        path: str,
+        capacity_bytes: int = ...,
+        max_record: int = ...,
+        sync: bool = ...,
+        opener: Optional[Callable[[str, str], Any]] = ...,
+    ) -> None: ...
     def put(self, key: int, data: _BytesLike) -> None: ...
     def delete(self, key: int) -> None: ...
     def get(self, key: int) -> Optional[bytes]: ...

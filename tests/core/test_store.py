@@ -5,6 +5,7 @@ import os
 from collections import OrderedDict
 
 from checks import TempDir, raises, skip
+from faultfs import FaultFS
 
 from acomm.codec._crc32_pure import crc32_pure
 from acomm.codec.crc32 import crc32
@@ -394,66 +395,123 @@ def test_record_bytes_as_documented():
         )
 
 
-def _failing(errno):
-    def f(*args):
-        raise OSError(errno)
-
-    return f
-
-
-def _fill_up(s):
-    # the filesystem under s is full from now on: an append writes a torn
-    # start of its record, as a full flash leaves it, then fails (ENOSPC)
-    f = s._f
-
-    def append(hdr, data, crc):
-        f.seek(s.used_bytes)
-        f.write(hdr[:5])
-        f.flush()
-        raise OSError(28)
-
-    s._append_record = append
-    s.compact = _failing(28)
-
-
-def _room_again(s):
-    del s._append_record
-    del s.compact
+# Full, read-only and failing filesystems, through the store's opener
+# (tests/core/faultfs.py; a real small filesystem in
+# tests/cpython/test_store_full_disk.py).
 
 
 def test_a_full_filesystem_refuses_a_put_and_keeps_what_was_there():
+    for short in (False, True):  # ENOSPC, or FAT's short count without an error
+        with _Dir() as d:
+            fs = FaultFS()
+            fs.short = short
+            s = Store(d.file(), opener=fs.open)
+            s.put(1, _data(1))
+            fs.free = 5  # the next record's first bytes fit, then the disk is full
+            e = raises(StoreFull, s.put, 2, _data(2))
+            assert str(e) == "store %s: filesystem full" % d.file(), e
+            assert s.keys() == [1] and s.get(1) == _data(1) and s.get(2) is None
+            raises(StoreFull, s.put, 3, b"x")  # and again, with nothing left
+            fs.free = None  # room again
+            s.put(2, _data(2))  # over the torn start
+            _check(s, OrderedDict(((1, _data(1)), (2, _data(2)))))
+            s.close()
+            s = Store(d.file())
+            _check(s, OrderedDict(((1, _data(1)), (2, _data(2)))))
+            assert s.stats["torn_dropped"] == 0
+            s.close()
+
+
+def test_a_refused_record_stays_refused_after_a_reopen():
+    # the whole record reached the file but its flush failed: the store cuts
+    # it off, so what put() refused never comes back after a reset
     with _Dir() as d:
-        s = Store(d.file())
+        fs = FaultFS()
+        s = Store(d.file(), opener=fs.open)
         s.put(1, _data(1))
-        _fill_up(s)
+        real = s._flush
+        calls = []
+
+        def flush_fails(f):
+            calls.append(f)
+            raise OSError(28)
+
+        s._flush = flush_fails
         raises(StoreFull, s.put, 2, _data(2))
-        assert s.keys() == [1] and s.get(1) == _data(1) and s.get(2) is None
-        # other OSErrors are not a full store
-        s._append_record = _failing(5)
-        assert not isinstance(raises(OSError, s.put, 2, _data(2)), StoreFull)
-        _room_again(s)
-        s.put(2, _data(2))  # over the torn start
+        s._flush = real
+        assert calls and s.keys() == [1]
         s.close()
         s = Store(d.file())
-        assert s.keys() == [1, 2] and s.get(2) == _data(2) and s.stats["torn_dropped"] == 0
+        if s.stats["torn_dropped"] == 0:  # the port can truncate (CPython)
+            assert _size(d.file()) == HDR + _rec_len(1)
+        assert s.keys() == [1] and s.get(2) is None
         s.close()
+
+
+def test_other_write_failures_are_a_store_error_with_the_cause():
+    with _Dir() as d:
+        fs = FaultFS()
+        s = Store(d.file(), opener=fs.open)
+        s.put(1, _data(1))
+        fs.fail = 5  # EIO
+        e = raises(StoreError, s.put, 2, _data(2))
+        assert not isinstance(e, StoreFull) and str(e).startswith("store %s: " % d.file()), e
+        assert s.keys() == [1]
+        s.put(2, _data(2))  # the fault has passed
+        fs.fail = 30  # the file system was remounted read-only
+        e = raises(StoreError, s.put, 3, _data(3))
+        assert str(e) == "store %s: read-only file system" % d.file()
+        fs.fail = 5
+        s.delete(1)  # a delete never raises for a failed write: deferred
+        assert s.keys() == [2] and s.stats["delete_deferred"] == 1
+        s.close()
+
+
+def test_a_path_that_cannot_be_written_fails_at_open_with_one_line():
+    with _Dir() as d:
+        for errno, why in ((30, "read-only file system"), (13, "permission denied")):
+            fs = FaultFS()
+            fs.refuse = errno
+            e = raises(StoreError, Store, d.file(), 65536, 1024, True, fs.open)  # no file yet
+            assert str(e) == "store %s: %s" % (d.file(), why) and not isinstance(e, StoreFull), e
+            s = Store(d.file())
+            s.put(1, _data(1))
+            s.close()
+            e = raises(StoreError, Store, d.file(), 65536, 1024, True, fs.open)  # a store there
+            assert str(e) == "store %s: %s" % (d.file(), why), e
+            os.remove(d.file())
+        # no room to create the store: StoreFull, and the store opens once there is
+        fs = FaultFS(free=2)
+        e = raises(StoreFull, Store, d.file(), 65536, 1024, True, fs.open)
+        assert str(e) == "store %s: filesystem full" % d.file()
+        fs.free = None
+        s = Store(d.file(), opener=fs.open)
+        s.put(1, _data(1))
+        s.close()
+        with Store(d.file()) as s:
+            assert s.get(1) == _data(1)
 
 
 def test_a_full_filesystem_defers_a_delete_until_a_compaction_fits():
     with _Dir() as d:
-        s = Store(d.file())
+        fs = FaultFS()
+        s = Store(d.file(), opener=fs.open)
         for k in (1, 2, 3):
             s.put(k, _data(k))
-        _fill_up(s)
+        fs.free = 0
         s.delete(2)  # no tombstone fits: forgotten now, not raised
         assert s.keys() == [1, 3] and s.get(2) is None and s.stats["delete_deferred"] == 1
         s.close()
-        s = Store(d.file())
+        s = Store(d.file(), opener=fs.open)
         assert s.keys() == [1, 2, 3]  # a reset before a compaction brings it back
+        fs.free = None
         s.delete(2)
-        _fill_up(s)
+        fs.free = 0
         s.delete(3)
-        _room_again(s)
+        raises(StoreFull, s.compact)  # no room for the copy: the store is as it was
+        assert s.keys() == [1] and s.get(1) == _data(1)
+        assert sorted(os.listdir(d.path)) == ["s"]  # no half copy left taking room
+        fs.free = None
         s.compact()  # room again: the deferred delete reaches the file
         s.close()
         s = Store(d.file())
@@ -463,13 +521,36 @@ def test_a_full_filesystem_defers_a_delete_until_a_compaction_fits():
 
 def test_a_compaction_with_no_room_does_not_fail_the_put_that_asked_for_it():
     with _Dir() as d:
-        s = Store(d.file(), capacity_bytes=100000)
+        fs = FaultFS()
+        s = Store(d.file(), capacity_bytes=100000, opener=fs.open)
         for v in range(40):  # dead bytes pile up past half the file
+            if v > 20:
+                fs.free = _rec_len(7, v)  # the record fits, the compaction's copy does not
             s.put(7, _data(7, v))
-            if v == 20:
-                s.compact = _failing(28)
         assert s.get(7) == _data(7, 39) and s.dead_bytes > s.used_bytes // 2
-        del s.compact
+        fs.free = None
         s.put(7, _data(7, 40))
         assert s.stats["compactions"] >= 1 and s.dead_bytes == 0
+        assert s.get(7) == _data(7, 40)
+        s.close()
+
+
+def test_a_store_at_capacity_on_a_full_filesystem_still_answers():
+    # both limits at once: the capacity wants a compaction, the filesystem
+    # has no room for it; put() refuses, get() and keys() still work
+    with _Dir() as d:
+        fs = FaultFS()
+        cap = HDR + 4 * 50
+        s = Store(d.file(), capacity_bytes=cap, opener=fs.open)
+        for k in range(4):
+            s.put(k, bytes(38))
+        s.delete(1)  # no room for the tombstone below capacity: compacted away
+        s.put(1, bytes(26))  # 38 bytes: 12 left, enough for a tombstone
+        s.delete(0)
+        fs.free = 0
+        raises(StoreFull, s.put, 6, bytes(38))  # the compaction it needs does not fit
+        assert s.keys() == [2, 3, 1] and s.get(3) == bytes(38) and s.get(1) == bytes(26)
+        fs.free = None
+        s.put(6, bytes(38))
+        assert s.keys() == [2, 3, 1, 6] and s.used_bytes <= cap
         s.close()
