@@ -14,6 +14,17 @@
 #   store_fill     a burst of low-priority packets until the store refuses
 #                  one; the AUV's store is small (3 KiB) all the time
 #   clock_jump     the node's wall clock jumps -30..+30 min; ticks run on
+#   outage         the node goes out of acoustic range for 30..90 min: what
+#                  is on its way to it waits in the senders' and relays'
+#                  stores and comes an hour late
+#   restart_pair   the two ends of a transfer or of a command waiting for
+#                  its acknowledgement both lose power in the middle of it
+#                  (any node when nothing is under way)
+#
+# Every node has the network key (strict mode, its counters in a file that
+# a power loss leaves behind, as a board's flash would), and every 3 min one
+# node sends another an acknowledged teleop command on the link, with 10 min
+# to live: the link resends it, sealed, for as long as it takes.
 #
 # Every node learns its routes (routing on, docs/routing.md): route requests,
 # replies and errors go through the same faults as the packets.
@@ -29,6 +40,12 @@
 #   packets_expired_at_relay, packets_failed_at_relay: of those reported, the
 #                          ones only their relay could report (EV_RELAY_STATUS)
 #   duplicates_delivered   deliveries to an application beyond the first (0)
+#                          (also as soak_packets_delivered_twice)
+#   soak_commands_executed_twice  commands handed to the receiving
+#                          application more than once, counted per extra copy (0)
+#   soak_commands_lost     reported delivered and never handed over (0)
+#   soak_commands_modem_acked_host_unplugged  the same while the receiver's
+#                          cable was out: its SeaTrac acknowledged by itself
 #   peak_memory_bytes      tracemalloc's peak over the whole run: the whole
 #                          process's Python allocations, the three nodes,
 #                          the emulators, the World and this harness
@@ -42,8 +59,11 @@ import tempfile
 import time
 import tracemalloc
 
+from acomm.apps.policy import commands
+from acomm.catalog import teleop
 from acomm.errors import AcommError
-from acomm.events import EV_PACKET, EV_PACKET_STATUS, EV_RELAY_STATUS
+from acomm.events import DELIVERED, EV_PACKET, EV_PACKET_STATUS, EV_RECEIVED, EV_RELAY_STATUS, EV_STATUS, is_final
+from acomm.frame.auth import Auth
 from acomm.drivers.mac import MacDriver, Tdma
 from acomm.node import Node
 from acomm.prng import Prng
@@ -66,8 +86,13 @@ STORE_BYTES = {BUOY: 32768, DIVER: 16384, AUV: 3072}
 SMALL_STORE = AUV
 LIFESPANS = (300, 900, 1800, 3600)
 # faults per simulated hour (the 24 h run); the test's short soak multiplies them
-RATES = {"modem_reboot": 2, "unplug": 2, "noise": 2, "power_loss": 1, "store_fill": 0.5, "clock_jump": 1}
+RATES = {"modem_reboot": 2, "unplug": 2, "noise": 2, "power_loss": 1, "store_fill": 0.5, "clock_jump": 1,
+         "outage": 0.25, "restart_pair": 1}
 PACKETS_PER_HOUR = 12  # per node
+FAR = (5000.0, 0.0, 6.0)  # out of every other node's range
+KEY = bytes(range(101, 133))  # the soak's network key (32 bytes)
+COMMAND_PERIOD_MS = 180000
+COMMAND_LIFESPAN_S = 600
 
 
 def _param(kind):
@@ -77,6 +102,8 @@ def _param(kind):
         return lambda r: (r.range(10, 600) * 1000, r.below(4))  # (ms, receiver index; 3: everywhere)
     if kind == "clock_jump":
         return lambda r: r.range(-1800, 1800)
+    if kind == "outage":
+        return lambda r: r.range(1800, 5400) * 1000
     return lambda r: 0
 
 
@@ -122,6 +149,12 @@ class Soak:
         self.traffic_period_ms = int(3600000 / (PACKETS_PER_HOUR * traffic_scale * len(NAMES)))
         self._traffic_until = w.now() + self.duration_ms
         self.stores_full = 0
+        # thrust payload -> [sender, receiver, request id, final status or None, times handed over,
+        # the receiver's cable was out at the final status]
+        self.commands = {}
+        self.cmd_rids = {}  # (sender, request id) -> the entry above
+        self.cmd_seq = 0
+        self._next_command = w.now() + COMMAND_PERIOD_MS // 2
 
     # -- the nodes -----------------------------------------------------------
     def _build(self, name):
@@ -140,6 +173,9 @@ class Soak:
         # learned routes (docs/routing.md): the nodes find their ways themselves, and a rebuilt
         # node starts with an empty route table, as a board's boot would
         Transport.of(node, store=store, wall=self.walls[name], routing=self.routing)
+        # the key, its counters reloaded from their file as at a boot
+        node.set_auth(Auth(KEY, path=os.path.join(self.dir, name + ".counters"), wall=self.walls[name]),
+                      commands(), strict=True)
         return node
 
     def _stepper(self, name):
@@ -161,6 +197,17 @@ class Soak:
                 led.status(me, ev[1], ev[2])
             elif code == EV_RELAY_STATUS:
                 led.relay_status(ADDR.get(ev[1], -1), ev[2], ev[3])
+            elif code == EV_RECEIVED:
+                c = self.commands.get(bytes(ev[4]))
+                if c is not None and c[1] == name:
+                    c[4] += 1
+            elif code == EV_STATUS and is_final(ev[3]):
+                c = self.cmd_rids.pop((name, ev[2]), None)
+                if c is not None:
+                    c[3] = ev[3]
+                    # a SeaTrac acknowledges by itself (docs/wire-format.md): with its cable out
+                    # the receiver's modem says delivered and its host never sees the command
+                    c[5] = self.cables[c[1]].out
             elif code == EV_PACKET:
                 data = ev[3]
                 if ev[2] != name or len(data) < 4:
@@ -172,6 +219,9 @@ class Soak:
 
     def _power_loss(self, name, now):
         sn = self.sn[name]
+        for k in [k for k in self.cmd_rids if k[0] == name]:
+            # the link's queue is in RAM: a command not yet final dies with it, unreported
+            self.cmd_rids.pop(k)[3] = "sender restarted"
         old = sn.node.transport
         self._counted["relayed"] += old.stats["relayed"]
         if old.router.routing is not None:
@@ -200,10 +250,46 @@ class Soak:
             self.channel.noise_burst(now, ms, receiver=None if who >= len(NAMES) else ADDR[NAMES[who]])
         elif kind == "power_loss":
             self._power_loss(name, now)
+        elif kind == "restart_pair":
+            a, b = self._under_way(name)
+            self._power_loss(a, now)
+            if b is not None:
+                self._power_loss(b, now)
+        elif kind == "outage":
+            self.channel.set_position(ADDR[name], FAR[0], FAR[1], FAR[2])
+            self.faults.later(now + param, "back", name, None)
+        elif kind == "back":
+            p = START[name]
+            self.channel.set_position(ADDR[name], p[0], p[1], p[2])
         elif kind == "clock_jump":
             self.walls[name].jump(param)
         elif kind == "store_fill":
             self._fill(name, now)
+
+    def _under_way(self, name):
+        # (sender, receiver) of a command waiting for its acknowledgement or
+        # of a transfer on the air, else (name, None)
+        for c in self.cmd_rids.values():
+            return c[0], c[1]
+        for n in NAMES:
+            for p in self.sn[n].node.transport._out:
+                if p.out is not None and p.hop is not None:
+                    for other in NAMES:
+                        if ADDR[other] == p.hop:
+                            return n, other
+        return name, None
+
+    def _command(self, now):
+        # an acknowledged thrust command, distinct from every other one
+        i = self.cmd_seq
+        self.cmd_seq += 1
+        v = ((i % 41 - 20) / 20, (i // 41 % 41 - 20) / 20, 0, 0, 0, 0)
+        data = teleop.CATALOG.pack([(teleop.THRUST, teleop.thrust_values(v, i % teleop.SEQ_MOD))])
+        src = NAMES[self.rng.below(len(NAMES))]
+        dst = self._other(src)
+        rid = self.sn[src].node.send("acoustic", dst, data, COMMAND_LIFESPAN_S, 2, ack=True, now=now)
+        c = self.commands.setdefault(data, [src, dst, rid, None, 0, False])
+        self.cmd_rids[(src, rid)] = c
 
     def _fill(self, name, now):
         # low-priority 200-byte packets until the store refuses one; always
@@ -238,6 +324,9 @@ class Soak:
         # the traffic task: one packet now, the next after an exponential gap
         if now >= self._traffic_until:
             return now + 3600000
+        if now >= self._next_command:
+            self._next_command = now + COMMAND_PERIOD_MS
+            self._command(now)
         r = self.rng
         src = NAMES[r.below(len(NAMES))]
         big = r.chance(0.3)
@@ -260,7 +349,8 @@ class Soak:
         def busy():
             # a packet without its final status at its origin, or one a relay holds in custody
             # (its origin was told `transmitted`: the relay delivers it or lets it expire)
-            return led.pending() or any(p.relayed for sn in self.sn.values() for p in sn.node.transport._out)
+            return led.pending() or self.cmd_rids or any(p.relayed for sn in self.sn.values()
+                                                         for p in sn.node.transport._out)
 
         limit = w.now() + drain_ms
         while busy() and w.now() < limit:
@@ -290,11 +380,19 @@ class Soak:
                 sn.node.transport.router.routing.finder.stats["requests"]
                 for sn in self.sn.values() if sn.node.transport.router.routing is not None),
             "task_deaths": sum(self.deaths.values()),
+            "packets_delivered_twice": c["duplicates"],
+            "commands_sent": len(self.commands),
+            "commands_executed_twice": sum(x[4] - 1 for x in self.commands.values() if x[4] > 1),
+            "commands_lost": sum(1 for x in self.commands.values() if x[3] == DELIVERED and not x[4] and not x[5]),
+            "commands_modem_acked_host_unplugged": sum(1 for x in self.commands.values()
+                                                       if x[3] == DELIVERED and not x[4] and x[5]),
+            "commands_not_delivered": sum(1 for x in self.commands.values() if x[3] not in (DELIVERED, None)),
+            "commands_without_status": sum(1 for x in self.commands.values() if x[3] is None),
             "stores_filled": self.stores_full,
             "simulated_s": self.w.now() // 1000,
         }
         for k, v in self.faults.counts.items():
-            if k != "plug":
+            if k not in ("plug", "back"):
                 f["faults_" + k] = v
         return f
 
@@ -323,7 +421,7 @@ def soak(seed=1, hours=24.0, rate_scale=1.0, traffic_scale=1.0, trace=True, rout
     return f, wall, s
 
 
-UNITS = {"peak_memory_bytes": "B", "simulated_s": "s"}
+UNITS = {"peak_memory_bytes": "B", "simulated_s": "s", "packets_delivered_twice": "packets"}
 
 
 def run(emit, quick=False):
@@ -332,5 +430,6 @@ def run(emit, quick=False):
     for k in ("packets_accepted", "packets_lost", "duplicates_delivered", "peak_memory_bytes"):
         emit(k, f.pop(k), UNITS.get(k, "packets" if k.startswith("packets") or k.startswith("dup") else "count"))
     for k in sorted(f):
-        emit("soak_" + k if not k.startswith("packets") else k, f[k], UNITS.get(k, "count"))
+        emit("soak_" + k if not k.startswith("packets") or k == "packets_delivered_twice" else k, f[k],
+             UNITS.get(k, "commands" if k.startswith("commands") else "count"))
     emit("soak_wall_s", wall, "s")
