@@ -59,6 +59,7 @@ _X_FLAGS = const(0x80)
 
 class Frame:
     # fields: ftype, src, dst, seq, flags, payload, authed
+    ctr = 0  # a sealed frame's counter, set by the link that opened it (acomm.frame.auth)
 
     def __init__(self, ftype, src, dst, seq, payload=b"", flags=0):
         self.authed = False  # set by the link when its tag verified (acomm.frame.auth)

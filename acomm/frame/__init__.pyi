@@ -35,6 +35,7 @@ class Frame:
     flags: int
     payload: bytes
     authed: bool
+    ctr: int
     def __init__(self, ftype: int, src: Any, dst: Any, seq: int, payload: bytes = ..., flags: int = ...) -> None: ...
     def __eq__(self, other: object) -> bool: ...
 

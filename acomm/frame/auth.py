@@ -123,11 +123,12 @@ class Auth:
         self.epoch = 0
         self._ann_end = 0  # frames up to this counter carry the epoch when they have room
         self._next = 1  # the next counter to send
+        self.last = 0  # the counter (and phase bit) of the latest seal
         self._reserved = 0  # counters up to this one are on file as used
         self._rx = {}  # source id -> [highest accepted, window bitmap, epoch]
         self._rx_saved = 0  # frames accepted since the file was written
         self.stats = {"sealed": 0, "opened": 0, "bad_tag": 0, "replayed": 0, "saves": 0, "epochs": 0,
-                      "no_key": 0}
+                      "no_key": 0, "again": 0}
         if path is not None:
             self._load()
 
@@ -166,31 +167,44 @@ class Auth:
         # whether a frame with room for it should carry the epoch now
         return self.epoch != 0 and self._next <= self._ann_end
 
-    def seal(self, ftype, src, dst, payload, seq=0, announce=False):
+    def seal(self, ftype, src, dst, payload, seq=0, announce=False, again=0):
         # -> payload + counter + tag; announce: the epoch rides along in the
-        # clear (adverts: how peers learn a new epoch)
-        key = self._keys[self.phase]
+        # clear (adverts: how peers learn a new epoch). again: a counter this
+        # node sealed with before (self.last after that seal): a resent
+        # request keeps its counter, so every copy of it is the same frame
+        # and the receiver's window takes at most one, however late
+        p = 1 if again & _PHASE else 0
+        c = again & _CTR_MAX
+        if not c or c >= self._next or self._keys[p] is None:
+            # a fresh count (or the phase of the first copy was dropped meanwhile)
+            p = self.phase
+            c = self._next
+            if c > _CTR_MAX:
+                raise AcommError("auth counter exhausted: the network needs a new key")
+            if c > self._reserved:
+                self._reserved = min(c + self.reserve - 1, _CTR_MAX)
+                self._save()
+            self._next = c + 1
+            self.stats["sealed"] += 1
+        key = self._keys[p]
         if key is None:  # an add_key() key the port has not added again since the start
-            raise AcommError("auth: no key for phase %d, the one in use" % self.phase)
-        c = self._next
-        if c > _CTR_MAX:
-            raise AcommError("auth counter exhausted: the network needs a new key")
-        if c > self._reserved:
-            self._reserved = min(c + self.reserve - 1, _CTR_MAX)
-            self._save()
-        self._next = c + 1
-        ctr = _b3(c | (_PHASE if self.phase else 0))
+            raise AcommError("auth: no key for phase %d, the one in use" % p)
+        self.last = c | (_PHASE if p else 0)
+        ctr = _b3(self.last)
         ep = _b4(self.epoch)
         tag = self._tag(key, ftype, src, dst, seq, ep, ctr, payload)
-        self.stats["sealed"] += 1
         if announce and self.epoch:
-            return bytes(payload) + ctr + ep + (b"\x80\x00\x00" if self.phase else b"\x00\x00\x00") + tag
+            return bytes(payload) + ctr + ep + (b"\x80\x00\x00" if p else b"\x00\x00\x00") + tag
         return bytes(payload) + ctr + tag
 
     # -- receiving -------------------------------------------------------------
-    def open(self, ftype, src, dst, body, seq=0):
-        # -> (payload, counter); AuthError when the tag is wrong or the
+    def open(self, ftype, src, dst, body, seq=0, again=False):
+        # -> (payload, counter and its phase bit); AuthError when the tag is wrong or the
         # counter was seen. Nothing is recorded until the tag verifies.
+        # again: the frame asks for an acknowledgement, so a genuine copy of
+        # one accepted before, whose counter is still inside the window, gives
+        # (None, counter): acknowledge it again (our ack may be what was
+        # lost), never deliver it again. Older copies get nothing.
         n = len(body) - self.overhead
         if n < 0:
             self.stats["bad_tag"] += 1
@@ -227,12 +241,40 @@ class Auth:
             self.commit()
         elif (st is not None and e < st[2]) or not self._fresh(src, c, e):
             self.stats["replayed"] += 1
+            if again and e == st[2] and 0 <= st[0] - c < _WINDOW:
+                self.stats["again"] += 1
+                return None, _u(ctr, 0, CTR_LEN)
             raise AuthError("counter %d of epoch %d from %d already seen" % (c, e, src))
         self.stats["opened"] += 1
         self._rx_saved += 1
         if self._rx_saved >= self.reserve:
             self._save()
-        return bytes(mv[:n]), c
+        return bytes(mv[:n]), _u(ctr, 0, CTR_LEN)  # with the phase bit: what an ACK echoes
+
+    def ack_tag(self, src, dst, seq, ctr, tag=None):
+        # A sealed ACK (src acknowledges to dst the frame with header
+        # sequence seq that dst sealed with counter ctr) carries no counter of
+        # its own: its tag is bound to that counter, which no other frame of
+        # dst's epoch has, so a recorded ACK acknowledges nothing but the
+        # same frame again. -> the tag to send (epoch: dst's, as we hold it),
+        # or with tag, whether it verifies (epoch: ours, dst is us)
+        key = self._keys[1 if ctr & _PHASE else 0]
+        if tag is None:
+            st = self._rx.get(dst)
+            e = 0 if st is None else st[2]
+        else:
+            e = self.epoch
+        if key is None:
+            self.stats["no_key"] += 1
+            return None if tag is None else False
+        t = key.digest(bytes((3, 1, src & 0xFF, dst & 0xFF, seq & 0xFF)), _b4(e), _b3(ctr))[: self.tag_len]
+        if tag is None:
+            return t
+        if same(t, tag):
+            self.stats["opened"] += 1
+            return True
+        self.stats["bad_tag"] += 1
+        return False
 
     def commit(self):
         # the node accepted a command: its counter goes to the file now

@@ -278,8 +278,11 @@ class Link:
         if len(data) > mtu:
             return self._refuse(req_id, "%d bytes exceed the %s MTU of %d" % (len(data), self.name, mtu))
         req = TxRequest(req_id, dst_id, priority, ticks_add(now, life_ms), bytes(data))
-        # retries left; a broadcast cannot be acknowledged
-        req.meta = [(self.max_retries if retries is None else retries) if (ack and dst_id is not None) else -1, seq, ftype]
+        # retries left (a broadcast cannot be acknowledged), sequence number, frame type, the
+        # counter its first copy was sealed with (every copy carries it: acomm.frame.auth), and
+        # when its first copy left
+        req.meta = [(self.max_retries if retries is None else retries) if (ack and dst_id is not None) else -1, seq, ftype,
+                    0, None]
         return self._enqueue(req, now)
 
     def _enqueue(self, req, now):
@@ -388,7 +391,13 @@ class Link:
         return self.driver.take_output()
 
     def _retry_or_fail(self, req, now, reason):
-        if req.meta[0] > 0:
+        t = req.meta[4]
+        if self.framing.auth is None and t is not None and ticks_diff(now, t) >= self.dup_window_ms:
+            # without a key the receiver's duplicate filter is all that knows a copy: a copy
+            # later than its window would be carried out again (with a key every copy carries
+            # the first one's counter, and the counter window refuses it however late)
+            self._final(req, _FAILED, reason + "; no copy after the receiver's duplicate window")
+        elif req.meta[0] > 0:
             req.meta[0] -= 1
             self.stats["retries"] += 1
             out = self.queue.push(req, now)
@@ -414,12 +423,12 @@ class Link:
         self._seqs[dst_id] = (s + 1) % self.seq_mod
         return s
 
-    def _send_control(self, now, kind, ftype, dst_id, seq, payload):
-        # Adverts and link acks: no request behind them, so a driver refusal
-        # is only counted.
+    def _send_control(self, now, kind, ftype, dst_id, seq, payload, ctr=0):
+        # Adverts and link acks (ctr: the acknowledged frame's counter): no
+        # request behind them, so a driver refusal is only counted.
         fl = self._fl
         try:
-            addr, data = self.framing.encode(ftype, dst_id, seq, payload)
+            addr, data = self.framing.encode(ftype, dst_id, seq, payload, 0, ctr)
             fl.handle = self.driver.send(now, addr, data, False)
         except AcommError:
             fl.clear()
@@ -433,8 +442,8 @@ class Link:
         fl = self._fl
         d = self.driver
         if self._pending_acks:
-            dst_id, seq = self._pending_acks.pop(0)
-            if self._send_control(now, _K_ACK, fr.ACK, dst_id, seq, b""):
+            dst_id, seq, ctr = self._pending_acks.pop(0)
+            if self._send_control(now, _K_ACK, fr.ACK, dst_id, seq, b"", ctr):
                 self.stats["acks_sent"] += 1
             return
         if self._acks.full():
@@ -469,13 +478,20 @@ class Link:
                     seq = self._next_seq(req.dst)
             req.meta[1] = seq
         flags = fr.F_ACK_REQ if (want_ack and not self.modem_acks) else 0
+        a = self.framing.auth
         try:
-            addr, data = self.framing.encode(req.meta[2], req.dst, seq, req.data, flags)
+            addr, data = self.framing.encode(req.meta[2], req.dst, seq, req.data, flags, req.meta[3])
             fl.handle = d.send(now, addr, data, want_ack and self.modem_acks)
         except AcommError as e:
             fl.clear()
             self._final(req, _FAILED, "driver refused the frame: %s" % e)
             return
+        if want_ack:
+            # a resend is the same frame: same counter, same tag (sealed once)
+            if a is not None:
+                req.meta[3] = a.last
+            if req.meta[4] is None:
+                req.meta[4] = now
         fl.kind = _K_DATA
         fl.seq = seq
         fl.dst_id = req.dst
@@ -570,6 +586,16 @@ class Link:
             # id: never hand it up as received
             self.stats["rx_own"] += 1
             return
+        if f.payload is None:
+            # a genuine copy of a frame taken before (its counter was seen): acknowledged
+            # again, since our ack may be what was lost, and never handed up again
+            self.stats["rx_duplicates"] += 1
+            if dst == self.node_id and len(self._pending_acks) < _MAX_PENDING_ACKS:
+                self._pending_acks.append((src, f.seq, f.ctr))
+            return
+        if f.ftype == fr.ACK and f.flags & fr.F_AUTH:
+            self._on_sealed_ack(now, f, src, dst)
+            return
         g = self.guard
         if g is not None and not f.authed and g.strict:
             # strict mode (acomm.link.guard): no control frame, and no node
@@ -604,10 +630,12 @@ class Link:
                 return
             if f.flags & fr.F_ACK_REQ and dst is not None:
                 if len(self._pending_acks) < _MAX_PENDING_ACKS:
-                    self._pending_acks.append((src, f.seq))
+                    self._pending_acks.append((src, f.seq, f.ctr))
                 if self._dups.seen(src * 257 + dst, f.seq, now):
                     self.stats["rx_duplicates"] += 1
                     return
+            if f.authed:
+                self.framing.auth.commit()  # on file before it is acted on: no restart makes it fresh
             self._emit((_EV_CONTROL, self, src, f.payload, f.authed))
             return
         data = f.ftype == fr.DATA or f.ftype == fr.REPLY
@@ -631,7 +659,7 @@ class Link:
             return
         if mine and f.flags & fr.F_ACK_REQ and dst is not None and len(self._pending_acks) < _MAX_PENDING_ACKS:
             # acknowledge duplicates too: our earlier ack may have been lost
-            self._pending_acks.append((src, f.seq))
+            self._pending_acks.append((src, f.seq, f.ctr))
         # senders number frames per destination (_next_seq), and modem
         # replies and broadcasts on one more counter: one filter key each
         if f.ftype == fr.REPLY:
@@ -645,10 +673,40 @@ class Link:
             self.stats["refused"] += 1
             self._emit((_EV_REFUSED, self, self.names.name_of(src), self.guard.REFUSED))
             return
+        if f.authed:
+            # its counter on file before the application has it: after a restart no
+            # recording of it is fresh again (a command's was written by the guard)
+            self.framing.auth.commit()
         ev = (_EV_RECEIVED, self, self.names.name_of(src), BROADCAST if dst is None else self.names.name_of(dst),
               f.payload)
         # with a key, whether the frame's tag verified
         self._emit(ev if self.guard is None else ev + (f.authed,))
+
+    def _on_sealed_ack(self, now, f, src, dst):
+        # A sealed ACK carries no counter: its tag is bound to the counter the
+        # request was sealed with, so it is checked against the request it
+        # would confirm (a recording of it confirms only that request again)
+        if dst != self.node_id:
+            self.stats["rx_not_for_us"] += 1
+            return
+        fl = self._fl
+        if fl.state == _SENDING and fl.kind == _K_DATA and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
+            req = fl.req  # the ack beat our own end-of-transmission estimate
+        else:
+            req = self._acks.by_ack(src, f.seq, False)
+        if req is None:
+            return  # late: the request is settled
+        if not self.framing.auth.ack_tag(src, dst, f.seq, req.meta[3], f.payload):
+            self.stats["rx_bad"] += 1
+            if self.guard is not None:
+                self.guard.count("ack")
+            return
+        self._heard(src, now)
+        if req is fl.req:
+            fl.canceled = True  # the slot frees at EV_TX_DONE
+        else:
+            self._acks.by_req_id(req.req_id)
+        self._final(req, _DELIVERED)
 
     # -- ranging (seed 000's ranging request and range received) ------------------
     def range(self, now, req_id, names, lifespan_s, priority=2):

@@ -26,12 +26,13 @@ class AckTable:
     def _take(self, i):
         return self._e.pop(i)[0]
 
-    def by_ack(self, dst_id, seq):
-        # the request that an ACK frame (source dst_id, sequence seq) confirms
+    def by_ack(self, dst_id, seq, take=True):
+        # the request that an ACK frame (source dst_id, sequence seq) confirms;
+        # take=False leaves it waiting (a sealed ACK is checked against it first)
         for i in range(len(self._e)):
             e = self._e[i]
             if e[2] == dst_id and e[3] == seq:
-                return self._take(i)
+                return self._take(i) if take else e[0]
         return None
 
     def by_handle(self, handle):

@@ -72,17 +72,27 @@ class LinkFraming:
         a = 0 if self.auth is None else self.auth.overhead
         return self._mtu - self.fec - a - fr.raw_overhead(self.node_id, fr.BROADCAST if dst_id is None else dst_id)
 
-    def encode(self, ftype, dst_id, seq, payload, flags=0):
+    def encode(self, ftype, dst_id, seq, payload, flags=0, again=0):
         # -> (interface address or None, frame bytes). On an elided link
         # whose modem acknowledges, the modem is asked for what the flags
-        # mean and they stay off the air.
+        # mean and they stay off the air. again: the counter a resent frame
+        # was sealed with (auth.last after its first encode), or for an ACK
+        # the counter of the frame it acknowledges (0: that frame was not
+        # sealed, and neither is its ACK)
         buf = self._buf
-        if self.auth is not None:
+        a = self.auth
+        if a is not None and ftype == fr.ACK:
+            # no counter of its own: a tag bound to the acknowledged frame's
+            payload = a.ack_tag(self.node_id, dst_id, seq, again) if again else None
+            if payload is not None:
+                flags |= fr.F_AUTH
+            else:
+                payload = b""
+        elif a is not None:
             # adverts carry the sender's counter epoch (acomm.frame.auth), and so
             # do the first frames of a new one when they have room for it
-            a = self.auth
             ann = ftype == fr.ADVERT or (a.announcing() and len(payload) + 7 <= self.mtu_for(dst_id))
-            payload = a.seal(ftype, self.node_id, dst_id, payload, seq, ann)
+            payload = a.seal(ftype, self.node_id, dst_id, payload, seq, ann, again)
             flags |= fr.F_AUTH
         if self.elided:
             n = fr.encode_elided_into(buf, ftype, seq, payload, flags if self.link_acks else flags & fr.F_AUTH)
@@ -116,9 +126,15 @@ class LinkFraming:
         if f.flags & fr.F_AUTH:
             if self.auth is None:
                 raise AuthError("authenticated frame, and this node has no key")
+            if f.ftype == fr.ACK:
+                # its tag is bound to the counter of the frame it acknowledges:
+                # the link, which knows that frame, checks it
+                return f, src, dst
             # a modem reply is sealed before anyone asks for it (Link.set_reply):
-            # its tag covers the broadcast destination, whoever receives it
-            f.payload = self.auth.open(f.ftype, src, None if f.ftype == fr.REPLY else dst, f.payload,
-                                       f.seq)[0]
+            # its tag covers the broadcast destination, whoever receives it.
+            # A payload of None: a genuine copy of a frame accepted before,
+            # which asks for an acknowledgement (acomm.frame.auth.Auth.open)
+            f.payload, f.ctr = self.auth.open(f.ftype, src, None if f.ftype == fr.REPLY else dst, f.payload,
+                                              f.seq, f.flags & fr.F_ACK_REQ and dst is not None)
             f.authed = True
         return f, src, dst

@@ -67,12 +67,15 @@ def test_a_forged_ack_is_refused_and_a_sealed_one_delivers():
     clk, drv, rec, link = _link()
     seq = _waiting(clk, drv, rec, link)
     drv.receive(2, 1, _plain(fr.ACK, seq))
-    # with F_AUTH and a guessed counter and tag
-    drv.receive(2, 1, _plain(fr.ACK, seq, bytes(7), fr.F_AUTH))
+    # with F_AUTH and a guessed tag
+    drv.receive(2, 1, _plain(fr.ACK, seq, bytes(4), fr.F_AUTH))
     link.poll(clk())
     assert rec.statuses(1)[-1] == WAITING
-    assert link.guard.refused == {"ack": 1} and link.framing.auth.stats["bad_tag"] == 1
-    drv.receive(2, 1, _peer().encode(fr.ACK, 1, seq, b"")[1])
+    assert link.guard.refused == {"ack": 2} and link.framing.auth.stats["bad_tag"] == 1
+    # the diver's ACK: its tag is bound to the counter the request was sealed with
+    peer = _peer()
+    f = peer.decode(1, 2, drv.sent[-1][2])[0]
+    drv.receive(2, 1, peer.encode(fr.ACK, 1, seq, b"", 0, f.ctr)[1])
     link.poll(clk())
     assert rec.statuses(1)[-1] == DELIVERED
 
