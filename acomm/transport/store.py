@@ -112,21 +112,6 @@ def _exists(p):
         return False
 
 
-def _close(f):
-    # closes f; a close that fails (its flush) changes nothing here
-    try:
-        f.close()
-    except (OSError, AttributeError):
-        pass
-
-
-def _remove(p):
-    try:
-        os.remove(p)
-    except OSError:
-        pass
-
-
 def _sync_dir(path):
     # A rename or a new file is durable only once its directory is: fsync
     # the directory where the OS allows it (CPython on POSIX). MicroPython
@@ -288,43 +273,42 @@ class Store:
         f = self._file()
         try:
             g = self._open(self._tmp, "wb")
-        except OSError as e:
-            raise self._err(e)
-        try:
-            self._write(g, MAGIC)
-            pos = len(MAGIC)
-            keys = bytearray()
-            locs = bytearray()
-            ks = self._keys
-            for j in range(len(ks) >> 2):
-                off, n = struct.unpack_from("<IH", self._locs, 6 * j)
-                # verify before copying so a record that rotted is left out
-                # instead of being carried into the new file
-                r = self._parse(off, self.used_bytes)
-                if r is None or r[0] != _PUT or r[2] != n or ks[4 * j : 4 * j + 4] != struct.pack("<I", r[1]):
-                    self.stats["corrupt_dropped"] += 1
-                    continue
-                self._copy(off, _OVER + n, g)
-                keys.extend(ks[4 * j : 4 * j + 4])
-                locs.extend(struct.pack("<IH", pos, n))
-                pos += _OVER + n
-            self._flush(g)
-            g.close()
-        except BaseException as e:
-            _close(g)
-            _remove(self._tmp)
-            if isinstance(e, OSError):
-                raise self._err(e)  # the store is as it was
-            raise
-        f.close()
-        self._f = None
-        try:
+            try:
+                g.write(MAGIC)
+                pos = len(MAGIC)
+                keys = bytearray()
+                locs = bytearray()
+                ks = self._keys
+                for j in range(len(ks) >> 2):
+                    off, n = struct.unpack_from("<IH", self._locs, 6 * j)
+                    # verify before copying so a record that rotted is left out
+                    # instead of being carried into the new file
+                    r = self._parse(off, self.used_bytes)
+                    if r is None or r[0] != _PUT or r[2] != n or ks[4 * j : 4 * j + 4] != struct.pack("<I", r[1]):
+                        self.stats["corrupt_dropped"] += 1
+                        continue
+                    self._copy(off, _OVER + n, g)
+                    keys.extend(ks[4 * j : 4 * j + 4])
+                    locs.extend(struct.pack("<IH", pos, n))
+                    pos += _OVER + n
+                self._flush(g)
+                if g.tell() != pos:
+                    raise OSError(_ENOSPC)  # a short write: FAT says so without an error
+            finally:
+                g.close()
+            f.close()
+            self._f = None
             _replace(self._tmp, self.path)
         except OSError as e:
             # the old file is still the store (a rename needs room on some
-            # file systems); the copy would only take room until the next open
-            _remove(self._tmp)
-            self._reopen()
+            # file systems too); the copy would only take room until the
+            # next open
+            try:
+                os.remove(self._tmp)
+            except OSError:
+                pass
+            if self._f is None:
+                self._reopen()
             raise self._err(e)
         if self._sync:
             _sync_dir(self.path)
@@ -365,10 +349,10 @@ class Store:
     def _create(self):
         f = self._open(self.path, "wb")
         try:
-            self._write(f, MAGIC)
+            f.write(MAGIC)  # a short one is a torn header: made again at the next open
             self._flush(f)
         finally:
-            _close(f)
+            f.close()
         if self._sync:
             _sync_dir(self.path)
 
@@ -378,16 +362,14 @@ class Store:
         # after a failed write the next record overwrites the partial one.
         f = self._f
         f.seek(self.used_bytes)
-        self._write(f, hdr)
-        self._write(f, data)
-        self._write(f, struct.pack("<I", crc))
+        f.write(hdr)
+        f.write(data)
+        f.write(struct.pack("<I", crc))
         self._flush(f)
-        self.used_bytes += _OVER + len(data)
-
-    def _write(self, f, b):
-        # a short count is a full filesystem too: FAT reports it so
-        if f.write(b) != len(b):
-            raise OSError(_ENOSPC)
+        n = self.used_bytes + _OVER + len(data)
+        if f.tell() != n:
+            raise OSError(_ENOSPC)  # a short write: FAT says so without an error
+        self.used_bytes = n
 
     def _reopen(self):
         # The store file again, after a failed write: a new file object
@@ -395,13 +377,22 @@ class Store:
         # would write it at the next seek, or fail there again), and the
         # file is cut back to its last whole record, so that the record
         # refused stays refused after a reset (where the port cannot cut,
-        # its first byte is spoiled, as far as the filesystem lets). When
-        # even the open fails the store is closed and says so.
-        _close(self._f)
-        self._f = None
+        # its first byte is spoiled, as far as the filesystem lets). A file
+        # system gone read-only still gives the file to read: what is
+        # stored can still be sent. When even that fails the store is
+        # closed and says so.
         try:
-            f = self._open(self.path, "r+b")
-        except OSError:
+            self._f.close()
+        except (OSError, AttributeError):  # its flush fails again; or no file
+            pass
+        self._f = f = None
+        for mode in ("r+b", "rb"):
+            try:
+                f = self._open(self.path, mode)
+                break
+            except OSError:
+                pass
+        if f is None:
             return
         self._f = f
         u = self.used_bytes
@@ -472,7 +463,7 @@ class Store:
         while n:
             k = n if n < _CHUNK else _CHUNK
             f.readinto(mv[:k])
-            self._write(g, mv[:k])
+            g.write(mv[:k])
             n -= k
 
     def _parse(self, p, size):

@@ -554,3 +554,23 @@ def test_a_store_at_capacity_on_a_full_filesystem_still_answers():
         s.put(6, bytes(38))
         assert s.keys() == [2, 3, 1, 6] and s.used_bytes <= cap
         s.close()
+
+
+def test_a_filesystem_gone_read_only_still_gives_what_is_stored():
+    # a file system remounted read-only after errors: writes fail with a
+    # StoreError, deletes are deferred, and the records still read back
+    with _Dir() as d:
+        fs = FaultFS()
+        s = Store(d.file(), opener=fs.open)
+        for k in (1, 2, 3):
+            s.put(k, _data(k))
+        fs.refuse = 30
+        fs.fail = 30
+        e = raises(StoreError, s.put, 4, _data(4))
+        assert str(e) == "store %s: read-only file system" % d.file()
+        _check(s, OrderedDict((k, _data(k)) for k in (1, 2, 3)))
+        s.delete(2)
+        raises(StoreError, s.compact)
+        _check(s, OrderedDict((k, _data(k)) for k in (1, 3)))
+        raises(StoreError, s.put, 4, _data(4))
+        s.close()
