@@ -11,14 +11,17 @@
 # which modems are up, then "ready", so a script knows when to type.
 #
 # Exit status: 0 at the end (end of input, --seconds, Ctrl-C, SIGTERM); 2
-# for a usage error (a wrong --modem KIND, a bad key file); 1 when a modem
-# cannot be opened or does not answer its start-up.
+# for a usage error (a wrong --modem KIND, a bad key file, a --store DIR
+# that cannot be written); 1 when a modem cannot be opened or does not
+# answer its start-up. A store whose disk fills up keeps the node running:
+# new packets are refused (their final status says "store full") and one
+# line says so, another when there is room again.
 
 import sys
 
 from acomm.apps.policy import commands
 from acomm.frame.auth import Auth
-from acomm.errors import AcommError
+from acomm.errors import AcommError, StoreError, StoreFull
 from acomm.events import AVAILABLE
 from acomm.link import BROADCAST
 from acomm.node import Node
@@ -142,6 +145,30 @@ def _send_when_heard(console, node, dst, text):
     return False
 
 
+def _store_lines(store, out):
+    # store.put, watched: one line when the store first refuses a record
+    # (its disk or its capacity is full), one when it takes one again; the
+    # packets refused in between each get their own final status
+    put = store.put
+    full = [False]
+
+    def watched(key, data):
+        try:
+            put(key, data)
+        except StoreFull as e:
+            if not full[0]:
+                full[0] = True
+                out.emit({"event": "store", "state": "full",
+                          "text": "%s; new packets are refused until there is room" % e})
+            raise
+        if full[0]:
+            full[0] = False
+            out.emit({"event": "store", "state": "room", "text": "store %s: room again" % store.path})
+
+    store.put = watched
+    return store
+
+
 def main(args):
     """`acomm node`: exit 0 at the end, 2 for a usage error, 1 when a link cannot be opened or started."""
     from ..hosttransport import HostTransport
@@ -183,7 +210,13 @@ def main(args):
         streams, watches, wheres = _modem_links(args, node)
         closers += streams
         ports += streams  # what the loop waits on
-        store = open_store(args.store) if args.store else None
+        try:
+            store = _store_lines(open_store(args.store), out) if args.store else None
+        except (StoreError, OSError) as e:
+            # a DIR that cannot be written: read-only, no permission, full
+            why = e if isinstance(e, StoreError) else "store %s: %s" % (args.store, (e.strerror or str(e)).lower())
+            print("acomm node: %s" % why, file=sys.stderr)
+            return 2
         if store is not None:
             closers.append(store)
         transport = HostTransport.of(node, store=store)

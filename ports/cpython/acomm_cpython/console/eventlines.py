@@ -125,7 +125,7 @@ def as_text(d):
         return "%s: %s on %s, up" % (d["link"], d["kind"], d["where"])
     if e == "ready":
         return "ready: node %s (%d) on %s; type help" % (d["node"], d["id"], ", ".join(d["links"]) or "no link")
-    if e == "listening":
+    if e == "listening" or e == "store":
         return d["text"]
     if e in ("help", "report"):
         return "\n".join(d["lines"])
