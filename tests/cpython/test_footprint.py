@@ -37,3 +37,26 @@ def test_from_a_romfs_image_the_imports_take_less_heap():
         assert 0 < code_rom < 0.7 * (files["code"] // 2)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def test_the_buoys_flash_writes_per_hour():
+    # `acomm bench footprint --only flash_writes --json`: the buoy's node as
+    # the board builds it, an hour of the demo's traffic, every file write
+    # counted (footprint_flash); no firmware needed
+    import json
+    import subprocess
+    import sys
+
+    from consoleprocs import tree_env
+
+    r = subprocess.run([sys.executable, "-m", "acomm_cpython.cli", "bench", "footprint", "--only", "flash_writes",
+                        "--json"], env=tree_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr
+    got = dict((d["name"], d) for d in map(json.loads, r.stdout.splitlines()))
+    w, b = got["flash_writes_per_hour_buoy"], got["flash_bytes_per_hour_buoy"]
+    assert w["unit"] == "writes/hour" and b["unit"] == "bytes/hour"
+    # the store (the log's lines delivered, the alarm relayed) and the
+    # counter file both wrote, each write a few to a few hundred bytes
+    assert "store" in r.stderr and "auth" in r.stderr, r.stderr
+    assert 50 < w["value"] < 5000 and 10 * w["value"] < b["value"] < 1000 * w["value"], (w, b)

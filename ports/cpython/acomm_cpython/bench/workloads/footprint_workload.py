@@ -32,6 +32,9 @@
 #       of the firmware without acomm and with the buoy's import closure frozen
 #   *_unix64_estimate_bytes   the first figures, on the 64-bit pip unix port
 #       with -X heapsize=Nw: estimates that understate a 32-bit board
+#   flash_writes_per_hour_buoy / flash_bytes_per_hour_buoy   the buoy's
+#       writes to flash (store records, compactions, the counter file) in
+#       a simulated hour of the demo's traffic (footprint_flash; no firmware)
 #   RP2040 (footprint_pico): flash_image_{rp2040_stock,buoy_pico}_bytes the
 #       images' sizes in flash (from their UF2); heap_free_boot_rp2040_stock
 #       gc.mem_free() after a collect at the stock firmware's REPL, just
@@ -158,7 +161,7 @@ VERBOSE = False
 
 # --only NAME: each group of figures and what it needs
 GROUPS = ("frozen_cortex_m", "routing_cortex_m", "loaded_cortex_m", "romfs_cortex_m", "romfs_routing_cortex_m", "mpy_cortex_m", "frozen_i386", "romfs_i386", "mpy_i386",
-          "flash_text", "boot_rp2040", "frozen_rp2040", "loaded_rp2040", "mpy_rp2040", "unix64")
+          "flash_text", "flash_writes", "boot_rp2040", "frozen_rp2040", "loaded_rp2040", "mpy_rp2040", "unix64")
 
 
 def _group(name, emit, ctx):
@@ -222,6 +225,10 @@ def _group(name, emit, ctx):
         st = ctx.setdefault("armv7m", Staged(ctx["tmp"], "armv7m"))
         emit("mpy_total_armv7m_bytes", sum(os.path.getsize(os.path.join(d, f)) for d, _, fs in os.walk(st.lib)
                                            for f in fs), "bytes")
+    elif name == "flash_writes":
+        from acomm_cpython.bench.workloads.footprint_flash import figures
+
+        figures(emit)
     elif name.endswith("_rp2040"):
         _rp2040(name, emit, ctx)
     elif name == "unix64":
