@@ -12,8 +12,18 @@
 # modem carries them (elided form), so a tag heard towards one node is no
 # good towards another. The sequence number is covered too: the link's
 # duplicate filter goes by it, and a SEGMENT frame's lane, generation, poll
-# and SACK bits ride in it (acomm.transport.segment). The flags are not: a link
-# resends a frame sealed afresh anyway.
+# and SACK bits ride in it (acomm.transport.segment). The flags are not.
+#
+# Exactly once: a link resends a request with the counter of its first copy
+# (seal(..., again=counter)), so every copy is the same frame and the
+# receiver's window takes at most one of them, however late. A genuine copy
+# of a frame taken before that asks for an acknowledgement opens as
+# (None, counter) when asked (open(..., again=True)) and its counter is in
+# the window: the link acknowledges it again and hands nothing up.
+#
+# A sealed ACK carries no counter of its own: its tag (ack_tag) is bound to
+# the counter of the frame it acknowledges, HMAC(key, 0x03 ACK src dst seq
+# epoch counter), epoch and key phase those of that frame's sender.
 #
 # Replays: each sender numbers its frames 1, 2, ... (one counter for all
 # its links and keys); a receiver keeps, per source, the highest counter it
@@ -32,8 +42,9 @@
 # without a flash write per frame: the sender reserves `reserve` counters
 # at a time and writes only when it runs out (after a restart it resumes
 # past the reservation); a receiver writes the sources' highest counters
-# every `reserve` accepted frames, and at once when the node accepts a
-# command (commit()), so no command can be replayed after a restart.
+# every `reserve` accepted frames, and at once (commit()) when the node
+# accepts a command or its link hands up a sealed DATA or route control
+# frame, so none of those can be replayed after a restart.
 #
 # Epochs: a node whose counter file is missing or damaged cannot know
 # where its counter stood, and starting again from 1 would make every peer

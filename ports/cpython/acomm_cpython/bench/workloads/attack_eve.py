@@ -2,8 +2,9 @@
 # answers to what it hears, and its own schedule. A mixin of the bench's
 # Attack, whose attributes it uses: eve (acomm_sim.attacker.Attacker), rng,
 # tries and won (per kind), recorded and before_restart (sealed frames
-# heard), pids, forged and sealed_tries (what it sent, for the spies), out
-# (packets waiting for the channel), restarted, sn (the nodes); for the
+# heard), cmd_recorded (every copy of a command heard, with its time),
+# restart_ms and jump_ms, jumped, pids, forged and sealed_tries (what it sent, for
+# the spies), out (packets waiting for the channel), restarted, sn (the nodes); for the
 # route attacks route_rng, route_recorded and route_before_restart (sealed
 # route control heard), route_tries and forged_requests (what it sent).
 from acomm import frame as fr
@@ -119,6 +120,15 @@ class Forger:
             if self.restarted:
                 for src, dst, data in self.before_restart[minute % 4 * 3:minute % 4 * 3 + 3]:
                     self._forge(now + 1500, src, dst, data, "replay_restart")
+            # every copy of the commands heard in the 3 minutes before the AUV's restart (or its
+            # clock's jump), each minute for 3 minutes after it: a copy the AUV never took is
+            # inside its counter window for as long as the buoy sends fewer than 32 frames
+            for kind, at, done in (("replay_after_restart", self.restart_ms, self.restarted),
+                                   ("replay_after_clock_jump", self.jump_ms, self.jumped)):
+                if done and now - at < 180000:
+                    for when, src, dst, data in self.cmd_recorded:
+                        if at - 180000 <= when < at:
+                            self._forge(now + 1700, src, dst, data, kind)
             # tag guessing: a thrust command from the buoy, counter and tag made up
             cmd = teleop.CATALOG.pack([(teleop.THRUST, teleop.thrust_values((1, 1, 0, 0, 0, 0), 0))])
             for k in range(3):

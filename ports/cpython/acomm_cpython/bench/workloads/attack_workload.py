@@ -45,6 +45,19 @@
 #   route_replay_restart
 #                   sealed route control to the AUV (or to all) heard before
 #                   its restart, after it
+#   replay_after_restart
+#                   every copy of the buoy's sealed commands to the AUV heard
+#                   in the 3 minutes before the AUV's restart, every minute
+#                   for 3 minutes after it (every other command's first copy
+#                   is lost to noise at the AUV, so the link sends it again
+#                   and the attacker holds copies the AUV never took)
+#   replay_after_clock_jump
+#                   at minute 20 the AUV's clock jumps a day ahead (its
+#                   duplicate filter then holds nothing recent); the same
+#                   with the commands heard in the 3 minutes before
+#   replay_after_hours
+#                   after the drain, two idle hours; then every copy of the
+#                   commands heard in the first 10 minutes
 #   (one route kind a minute in turn, two or three frames; unsealed, or
 #   with F_AUTH and a made-up counter and tag, by turns)
 #
@@ -62,7 +75,9 @@
 # refusal its receiver never sent; advert, a node's address map moved (the
 # bench puts it back so that the other attacks still have a network);
 # replay_* and tag_guess, a frame the key took for the second time
-# (or, for a guess, at all) and that reached an application again; flood, a legitimate sealed transfer refused
+# (or, for a guess, at all) and that reached an application again (for the
+# replay_after_* kinds: a command the AUV's application had, handed to it
+# again, whichever copy the key took); flood, a legitimate sealed transfer refused
 # "receiver full"; oversize, a node that stopped (an exception out of its
 # step) or reassembly memory past its bound; route_reply, route_error,
 # route_request_flood and route_flood, a forged frame after which a node
@@ -82,6 +97,7 @@ import shutil
 import tempfile
 
 from acomm import frame as fr
+from acomm.compat import ticks_add
 from acomm.transport import segment as sg
 from acomm.apps.policy import commands
 from acomm.frame.auth import Auth
@@ -110,22 +126,35 @@ EVE_AT = (25.0, 15.0, 3.0)
 FAR = (5000.0, 0.0, 6.0)  # the AUV out of range
 KINDS = ("ack", "sack_complete", "sack_bitmap", "sack_refusal", "advert", "replay_same", "replay_other",
          "replay_restart", "tag_guess", "flood", "oversize", "route_reply", "route_error", "route_request_flood",
-         "route_flood", "route_replay", "route_replay_restart")
+         "route_flood", "route_replay", "route_replay_restart", "replay_after_restart", "replay_after_clock_jump",
+         "replay_after_hours")
+AFTER = ("replay_after_restart", "replay_after_clock_jump", "replay_after_hours")
 BY_ADDR = dict((ADDR[n], n) for n in NAMES)
 # the legitimate route searches: (from, to), one every 40 s in turn
 SEARCHES = ((BUOY, AUV), (DIVER, BUOY), (AUV, DIVER), (BUOY, DIVER), (DIVER, AUV), (AUV, BUOY))
 MINUTES = 60
 RESTART_MS = 35 * 60000
+JUMP_MS = 20 * 60000
 LIFESPAN_S = 3000
+IDLE_MS = 2 * 3600000  # before replay_after_hours
+EARLY_MS = 10 * 60000  # the commands it replays were heard before this
 
 
 class Attack(Forger):
-    def __init__(self, strict=True, seed=1, minutes=MINUTES, lifespan_s=LIFESPAN_S, restart_ms=RESTART_MS):
+    def __init__(self, strict=True, seed=1, minutes=MINUTES, lifespan_s=LIFESPAN_S, restart_ms=RESTART_MS,
+                 jump_ms=JUMP_MS, early_ms=EARLY_MS):
         """lifespan_s: the legitimate packets' (the drain lasts until the last is settled);
-        restart_ms: when the AUV restarts its key state. A shorter run (a test) may shorten both."""
+        restart_ms: when the AUV restarts its key state; jump_ms: when its clock jumps; early_ms:
+        the commands replayed after the idle hours were heard before it. A shorter run (a test)
+        may shorten them."""
         self.strict = strict
         self.lifespan_s = lifespan_s
         self.restart_ms = restart_ms
+        self.jump_ms = jump_ms
+        self.early_ms = early_ms
+        self.cmd_recorded = []  # (when, src, dst, bytes): every sealed command copy heard, buoy to AUV
+        self.jumped = False
+        self.noised = set()  # commands whose first copy the AUV lost to noise
         self.dir = tempfile.mkdtemp(prefix="acomm-attack-")
         self.channel = Channel(seed=seed, loss_curve=LOSS_CURVE)
         self.w = w = World(seed=seed, channel=self.channel, step_ms=20, max_quiet_ms=200)
@@ -182,6 +211,31 @@ class Attack(Forger):
         self.busy_until = 0
         self._check_adverts_at = None
         self.refused_before = {}  # the AUV's refusals before its restart
+        self.saves_before = 0  # and its counter file writes
+        self.saves_per_hour = {}
+        self._noise_first_copies()
+
+    def _noise_first_copies(self):
+        # every other command's first copy is lost to noise at the AUV: its sender's link sends
+        # it again, and the attacker holds a copy the AUV never took, the copy of the hole this
+        # bench once found (copies 24 and 25, the AUV took 25, the replay of 24 later was
+        # fresh). The attacker records every copy of a command with a hydrophone that only
+        # listens (its transceiver, busy with its own packets most of each minute, hears few)
+        ch = self.channel
+        transmit = ch.transmit
+
+        def spy(now, src, packet, airtime_ms):
+            if src == ADDR[BUOY] and getattr(packet, "dst", None) == ADDR[AUV]:
+                c = self.commands.get(_command_of(packet.data))
+                if c is not None and not [x for x in self.cmd_recorded if x[3] == packet.data]:
+                    # each copy once (a copy sealed once is one recording however often it went)
+                    self.cmd_recorded.append((now, src, ADDR[AUV], packet.data))
+                if c is not None and c[0] % 2 == 0 and c[0] not in self.noised:
+                    self.noised.add(c[0])
+                    ch.noise_burst(now, airtime_ms + 1000, ADDR[AUV])
+            return transmit(now, src, packet, airtime_ms)
+
+        ch.transmit = spy
 
     def _counters(self, name):
         return os.path.join(self.dir, name + ".auth")
@@ -280,7 +334,20 @@ class Attack(Forger):
                 auth = link.framing.auth
                 opened = auth.stats["opened"]
                 handed = self.handed[me]
+                cmd = self.commands.get(_command_of(data)) if kind in AFTER else None
+                had = cmd[2] if cmd is not None else 0
                 on_rx(now, src_addr, dst_addr, data)
+                if kind in AFTER:
+                    # a command the application had, handed to it again (by whichever copy: the
+                    # hole closed here was a resent copy with a counter of its own)
+                    if cmd is not None and had and cmd[2] > had:
+                        self.won[kind] += 1
+                    if auth.stats["opened"] > opened:
+                        if had:
+                            self.taken_again[kind] = self.taken_again.get(kind, 0) + 1
+                        else:
+                            self.first_copies += 1  # the AUV had no copy: the attacker only delivered it
+                    return
                 if rtry is not None:
                     self._route_outcome(rtry, before, self._route_state(me), known,
                                         auth.stats["opened"] > opened and (src_addr, bytes(data[-7:])) in seen)
@@ -395,6 +462,15 @@ class Attack(Forger):
             self.far = far
             pos = FAR if far else START[AUV]
             self.channel.set_position(ADDR[AUV], pos[0], pos[1], pos[2])
+        if not self.jumped and now >= self.jump_ms:
+            # the AUV's clock jumps a day ahead: what its duplicate filter remembers is a day
+            # old (the counter window does not go by time); the attacker's replays follow
+            # (attack_eve)
+            self.jumped = True
+            dups = self.sn[AUV].node.links["acoustic"]._dups
+            for lst in dups._recent.values():
+                for e in lst:
+                    e[1] = ticks_add(e[1], -86400000)
         if not self.restarted and now >= self.restart_ms:
             self.restarted = True
             self.before_restart = list(self.recorded)
@@ -402,6 +478,7 @@ class Attack(Forger):
             self.route_before_restart = [x for x in self.route_recorded if x[1] in (ADDR[AUV], 0)]
             node = self.sn[AUV].node
             self.refused_before = dict(node.guard.refused)
+            self.saves_before = node.auth.stats["saves"]
             node.set_auth(Auth(KEY, path=self._counters(AUV)), commands(), strict=self.strict)
             node.links["acoustic"]._dups = DuplicateFilter(60000)
 
@@ -416,11 +493,16 @@ class Attack(Forger):
                 return now + 100
 
         w.add_task(self)
-        w.add_task(_Eve())
+        self._eve_task = _Eve()
+        w.add_task(self._eve_task)
         end = w.now() + self.minutes * 60000
         while w.now() < end:
             w.run(min(600000, end - w.now()))
         w.remove_task(self)
+        # counter file writes (flash writes on a board) per hour of the attack, each node
+        for name in NAMES:
+            n = self.sn[name].node.auth.stats["saves"] + (self.saves_before if name == AUV else 0)
+            self.saves_per_hour[name] = round(n * 60 / self.minutes, 1)
         self.channel.set_position(ADDR[AUV], START[AUV][0], START[AUV][1], START[AUV][2])
         self.far = None
         # the attacker stops too; the legitimate traffic drains
@@ -428,7 +510,24 @@ class Attack(Forger):
         limit = w.now() + 2 * self.lifespan_s * 1000
         while (led.pending() or self.cmd_rids) and w.now() < limit:
             w.run(600000, until=lambda: not led.pending() and not self.cmd_rids)
+        self._after_hours()
         return self
+
+    def _after_hours(self):
+        # two idle hours (nothing but adverts: the world skips the quiet time), then the
+        # attacker plays every copy of the commands it heard in the first minutes to the AUV
+        w = self.w
+        w.remove_task(self._eve_task)  # the attacker waits too: the world skips the quiet time
+        w.run(IDLE_MS)
+        now = w.now()
+        for when, src, dst, data in self.cmd_recorded:
+            if when < self.early_ms:
+                self._forge(now, src, dst, data, "replay_after_hours")
+        end = now + 60000 + 4000 * len(self.out)
+        while w.now() < end and self.out:
+            w.run(1000)
+            self._flush(w.now())
+        w.run(10000)
 
     def figures(self):
         f = {}
@@ -468,6 +567,8 @@ class Attack(Forger):
                                               if e[0] == EVE)
         f["attack_legit_route_requests"] = sum(self._routing(ADDR[n]).finder.stats["requests"] for n in NAMES)
         f["attack_legit_route_control_sent"] = sum(self._routing(ADDR[n]).stats["control_sent"] for n in NAMES)
+        for name in NAMES:
+            f["attack_auth_saves_per_hour_" + name] = self.saves_per_hour.get(name, 0)
         f["attack_node_deaths"] = self.deaths
         f["attack_max_reassembly_bytes"] = self.max_rx_bytes
         refused = dict(self.refused_before)
@@ -482,8 +583,18 @@ class Attack(Forger):
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
-UNITS = {"attack_max_reassembly_bytes": "B", "attack_route_request_flood_amplification": "x",
+UNITS = {"attack_max_reassembly_bytes": "B", "attack_auth_saves_per_hour_buoy": "/h", "attack_auth_saves_per_hour_diver": "/h",
+         "attack_auth_saves_per_hour_auv": "/h", "attack_route_request_flood_amplification": "x",
          "attack_route_flood_amplification": "x"}
+
+
+def _command_of(data):
+    # a sealed DATA frame on the water -> its payload without the seal's trailer (None otherwise)
+    try:
+        f = fr.decode_elided(data, 0, 0)
+    except Exception:
+        return None
+    return unsealed(f.payload) if f.ftype == fr.DATA and f.flags & fr.F_AUTH else None
 
 
 def _control_body(data):
@@ -546,5 +657,6 @@ def frame_costs():
             if link_acks:  # an acomm ACK goes on the air only where the modem does not acknowledge
                 frames = (("ack", fr.ACK, 5, b""),) + frames
             for name, ftype, head, body in frames:
-                out["auth_bytes_%s_%s_%s" % (name, form, tag)] = len(f.encode(ftype, 2, head, body)[1])
+                # an ACK's tag is bound to the counter of the frame it acknowledges (here 1)
+                out["auth_bytes_%s_%s_%s" % (name, form, tag)] = len(f.encode(ftype, 2, head, body, 0, 1)[1])
     return out
