@@ -714,7 +714,7 @@ class Transport:
             body = blob[h.size :]
             if h.relay is not None:
                 origin, final, prio, life = h.relay
-                if self.router.routing is not None:
+                if self.router.routing is not None and origin != self.node_id:
                     self.router.routing.learn(now, link, origin, src)  # the way back, for free
             else:
                 origin, final, prio, life = src, self.node_id, 8, 3600
@@ -726,6 +726,9 @@ class Transport:
             # bytes, and the destination checks the rest)
             if not self._is_done(origin, h.pid):
                 p = self._packet(origin, final, h.pid, prio, self.wall() + life, body, h.compressed, None)
+                # custody, even of a packet of ours that a routing loop brought back after a relay
+                # took it: its origin (this node) heard `transmitted` then, and hears nothing more
+                p.relayed = True
                 if not self._keep(p):
                     return False
                 self.stats["relayed"] += 1

@@ -61,6 +61,23 @@ def test_a_relay_tells_its_own_listeners_of_a_packet_that_expired_in_its_custody
     assert c.node.transport.stats["expired"] == 1
 
 
+def test_a_packet_a_routing_loop_brings_back_to_its_origin_gets_no_second_status():
+    # the auv's route to the buoy goes back through the diver (a loop, as stale learned routes
+    # make after a restart): the diver hears `transmitted` when the auv takes custody, and when
+    # its own packet comes back it takes custody like any relay (found in the 24-hour soak:
+    # a `delivered` after `transmitted` for the same packet)
+    w, a, b, c, ta = net(relay=True)
+    c.node.transport.router.routes["buoy"] = "diver"
+    pid = ta.send(w.now(), "buoy", Prng(11).bytes(40), 3600, 5)
+    assert w.run(600000, until=lambda: TRANSMITTED in statuses(a, pid))
+    ta.router.routes.clear()  # the diver's way to the buoy is straight now
+    w.channel.set_position(2, 150.0, 0.0, 10.0)
+    assert w.run(1200000, until=lambda: packets(b))
+    w.run(60000)
+    assert statuses(a, pid) == [QUEUED, TRANSMITTED] and len(packets(b)) == 1
+    assert ta.stats["relayed"] == 1
+
+
 def test_a_relay_forwards_the_body_as_the_origin_chose_it():
     # compressed by the origin: the relay forwards it compressed, without
     # decompressing; not compressed by the origin (compress=False): the
