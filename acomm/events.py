@@ -57,6 +57,12 @@ EV_RANGE = const(5)
 EV_DRIVER_UP = const(6)
 EV_DRIVER_DOWN = const(7)
 EV_REPLIED = const(8)
+# (EV_TIME, source, secs, ms, uncertainty_ms, at): a driver that can tell
+# the time did ("iridium": AT-MSSTM, "gsm": AT+CCLK?, "gps": NMEA): secs
+# from 2020-01-01 UTC, ms past it, how far off it may be, and the ticks
+# (ms) at which it held. The link passes it to the node, whose wall clock
+# (acomm.wallclock) takes it; it is not given to the listeners
+EV_TIME = const(9)
 
 # Link -> node/application events, passed to the listener as tuples:
 #   (EV_STATUS, link, req_id, status, reason)
@@ -106,6 +112,11 @@ RANGE_ADDR = const(2)  # EV_RANGE: who answered (None when the ping failed)
 RANGE_METRES = const(3)  # EV_RANGE
 RANGE_EXTRA = const(4)  # EV_RANGE, when present: a dict of what else the fix says
 DOWN_REASON = const(1)  # EV_DRIVER_DOWN
+TIME_SOURCE = const(1)  # EV_TIME: "iridium", "gsm", "gps"
+TIME_SECS = const(2)  # EV_TIME: seconds from 2020-01-01 UTC
+TIME_MS = const(3)  # EV_TIME: ms past them
+TIME_UNC = const(4)  # EV_TIME: its uncertainty in ms
+TIME_AT = const(5)  # EV_TIME: the ticks (ms) at which it held
 # Link -> node and application (LINK: the Link, in every one of them):
 LINK = const(1)
 REQ_ID = const(2)  # EV_STATUS, EV_RANGE_RECEIVED: the request's id

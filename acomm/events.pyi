@@ -31,6 +31,7 @@ EV_RANGE: int
 EV_DRIVER_UP: int
 EV_DRIVER_DOWN: int
 EV_REPLIED: int
+EV_TIME: int
 
 EV_STATUS: int
 EV_RECEIVED: int
@@ -53,6 +54,11 @@ RANGE_ADDR: int
 RANGE_METRES: int
 RANGE_EXTRA: int
 DOWN_REASON: int
+TIME_SOURCE: int
+TIME_SECS: int
+TIME_MS: int
+TIME_UNC: int
+TIME_AT: int
 LINK: int
 REQ_ID: int
 STATUS: int

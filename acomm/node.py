@@ -11,6 +11,13 @@
 # to and from endpoints (UDP, TCP: acomm.drivers.datagram) has pump(now)
 # instead: it feeds the driver what arrived and sends what the driver has,
 # and the node calls it before and after each poll of the link.
+#
+# Wall clock: a node given one (acomm.wallclock.WallClock, `wallclock`)
+# feeds it the times its drivers read (AT-MSSTM, AT+CCLK?: each driver with
+# take_times()) and those of other time sources (add_time_source: a GPS
+# reader on its own UART), and polls it every step; the ports hand its
+# wall() to the key (Auth) and the transport. The times are not given to
+# the listeners.
 
 from .compat import const, ticks_ms
 from .link import Link
@@ -31,6 +38,8 @@ _SEG_HEAD = const(4)
 _SEG_PAYLOAD = const(5)
 _SEG_AUTHED = const(6)
 
+_TIME_AT = const(5)  # acomm.events: EV_TIME's ticks
+
 _READ_CHUNK = const(256)
 _EVENT_BACKLOG = const(64)
 _READS_PER_STEP = const(16)
@@ -39,8 +48,13 @@ _READS_PER_STEP = const(16)
 class Node:
     """One system on the network: its name and id (0..254), links, name table; every event to its listeners."""
 
-    def __init__(self, name, node_id, clock=None, names=None, listener=None):
-        """clock() -> ticks in ms (default: the runtime's); listener(ev), if given, is the first listener."""
+    # absent unless given (class defaults: no slot on a board's instance)
+    wallclock = None  # acomm.wallclock.WallClock
+    _timed = ()  # ((time source, its stream or None), ...)
+
+    def __init__(self, name, node_id, clock=None, names=None, listener=None, wallclock=None):
+        """clock() -> ticks in ms (default: the runtime's); listener(ev), if given, is the first listener;
+        wallclock: the acomm.wallclock.WallClock its drivers' times set."""
         self.name = name
         self.node_id = node_id
         self.clock = clock if clock is not None else ticks_ms
@@ -48,9 +62,9 @@ class Node:
         self.names.add(name, node_id)
         self.listeners = [listener] if listener is not None else []
         self.links = {}
-        self._streams = {}
-        self._pumps = {}  # link name -> the frame port's pump, or None
-        self._unsent = {}  # link name -> bytes a short write left behind
+        # link name -> [its stream, the frame port's pump or None, bytes a
+        # short write left behind]: one dict, not three (a board's heap)
+        self._io = {}
         self._req_id = 0
         self.auth = None  # acomm.frame.auth.Auth: set_auth()
         self.guard = None
@@ -65,6 +79,8 @@ class Node:
         # links' SEGMENT frames and the statuses of its own requests
         self.transport = None
         self._now = 0
+        if wallclock is not None:
+            self.wallclock = wallclock
 
     def set_auth(self, auth, guard=None, strict=True):
         """A network key (acomm.frame.auth.Auth) for every link, present and future, and the
@@ -111,10 +127,16 @@ class Node:
         if self.auth is not None:
             self._secure(link)
         self.links[name] = link
-        self._streams[name] = stream
-        self._pumps[name] = getattr(stream, "pump", None) if stream is not None else None
-        self._unsent[name] = b""
+        self._io[name] = [stream, getattr(stream, "pump", None) if stream is not None else None, b""]
+        if getattr(driver, "take_times", None) is not None:
+            self.add_time_source(driver)
         return link
+
+    def add_time_source(self, source, stream=None):
+        """A source of times for the wall clock: source.take_times() -> EV_TIME tuples each step; with a
+        stream, the node reads it and gives the bytes to source.feed(now, data) first (a GPS reader)."""
+        self._timed = self._timed + ((source, stream),)
+
 
     def link(self, name):
         return self.links[name]
@@ -170,8 +192,9 @@ class Node:
             self.transport.poll(now)  # its fragments join the link queues first
         for name in self.links:
             link = self.links[name]
-            stream = self._streams[name]
-            pump = self._pumps[name]
+            io = self._io[name]
+            stream = io[0]
+            pump = io[1]
             if pump is not None:
                 pump(now)
                 link.poll(now)
@@ -191,8 +214,23 @@ class Node:
                     data = self._read(stream)
             link.poll(now)
             if stream is not None:
-                self._write(name, link, stream)
+                self._write(io, link, stream)
+        if self._timed:
+            self._times(now)
+        if self.wallclock is not None:
+            self.wallclock.poll(now)
         return now
+
+    def _times(self, now):
+        wc = self.wallclock
+        for source, stream in self._timed:
+            if stream is not None:
+                data = self._read(stream)
+                if data:
+                    source.feed(now, data)
+            for ev in source.take_times():
+                if wc is not None:
+                    wc.fix(ev[_TIME_AT], ev[1], ev[2], ev[3], ev[4])
 
     def _read(self, stream):
         # A stream whose device went away (pyserial's SerialException is an
@@ -204,11 +242,11 @@ class Node:
             self.stream_errors += 1
             return None
 
-    def _write(self, name, link, stream):
+    def _write(self, io, link, stream):
         # machine.UART.write may take only part of the bytes (or return None
-        # on timeout): keep the rest and send it first next time, before
-        # taking more output from the link.
-        out = self._unsent[name]
+        # on timeout): keep the rest (io[2]) and send it first next time,
+        # before taking more output from the link.
+        out = io[2]
         if not out:
             out = link.take_output()
             if not out:
@@ -220,11 +258,11 @@ class Node:
             # see to its commands); not kept, or stale commands would reach
             # the modem when the line comes back
             self.stream_errors += 1
-            self._unsent[name] = b""
+            io[2] = b""
             return
         if n is None:
             n = 0
-        self._unsent[name] = out[n:] if n < len(out) else b""
+        io[2] = out[n:] if n < len(out) else b""
 
     async def run(self, period_ms=10, stop=None):
         # Runs until stop() returns True (forever when stop is None).

@@ -5,6 +5,7 @@ from .link import Link
 from .link.guard import Guard
 from .link.names import NameTable
 from .transport import Transport
+from .wallclock import WallClock
 
 # an event: a tuple whose first item is an acomm.events EV_* code
 _Event = Tuple[Any, ...]
@@ -24,6 +25,7 @@ class Node:
     backlog_dropped: int
     stream_errors: int
     transport: Optional[Transport]
+    wallclock: Optional[WallClock]
     def __init__(
         self,
         name: str,
@@ -31,6 +33,7 @@ class Node:
         clock: Optional[Callable[[], int]] = ...,
         names: Optional[NameTable] = ...,
         listener: Optional[_Listener] = ...,
+        wallclock: Optional[WallClock] = ...,
     ) -> None: ...
     def set_auth(self, auth: Optional[Auth], guard: Optional[Guard] = ..., strict: bool = ...) -> None: ...
     def attach(self, transport: Transport) -> None: ...
@@ -38,6 +41,8 @@ class Node:
     def unlisten(self, fn: _Listener) -> None: ...
     # stream: read(n) -> bytes or None, write(bytes) -> int or None; or a frame port with pump(now)
     def add_link(self, name: str, driver: Any, stream: Any = ..., **options: Any) -> Link: ...
+    # source: take_times() -> EV_TIME tuples; with a stream also feed(now, bytes)
+    def add_time_source(self, source: Any, stream: Any = ...) -> None: ...
     def link(self, name: str) -> Link: ...
     def next_req_id(self) -> int: ...
     def emit(self, ev: _Event) -> None: ...

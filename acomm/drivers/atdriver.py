@@ -22,6 +22,16 @@
 # queue), caps.bitrate is 0 (so the transport's router prefers other links),
 # and the driver says EV_DRIVER_DOWN "no signal" once; EV_DRIVER_UP when it
 # comes back.
+#
+# Time: a subclass that can ask the modem for the time sets time_spec =
+# (command, source name, uncertainty in ms) (Iridium b"AT-MSSTM", GSM
+# b"AT+CCLK?"), time_period_ms, and parse_time(line) -> (secs, ms) or None
+# (no time yet). The driver asks when the line is free and it has nothing
+# else to do: at once when it is up, then every time_period_ms (and when the
+# subclass sets _time_at = now, after an Iridium session); a "no time"
+# answer asks again after csq_period_ms. The last time read is a tuple
+# (EV_TIME, source, secs, ms, unc_ms, now) that take_times() hands to the
+# node's wall clock (acomm.wallclock).
 
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
@@ -40,9 +50,11 @@ _S_UP = const(2)  # acomm.drivers.base
 # RAM (imported, each took a slot in this module's dict)
 _EV_DRIVER_DOWN = const(7)
 _EV_DRIVER_UP = const(6)
+_EV_TIME = const(9)
 
 _T_CONFIG = const(1)
 _T_CSQ = const(2)
+_T_TIME = const(3)
 # the subclasses number their own command tags from 10
 
 
@@ -53,6 +65,13 @@ class AtSlot(SlotBase):
 
 
 class AtDriver(SlotDriver):
+    # the time: off unless a subclass asks (class attributes, so that a
+    # driver without it takes no slot for them on a board)
+    time_spec = None  # (command, source, uncertainty_ms)
+    time_period_ms = 0
+    _time_at = None  # when to ask next; None: as soon as the driver is up
+    _fix = None  # the last time read, until take_times()
+
     def __init__(self, steps, urcs, mtu, line_cap, block_cap, cmd_timeout_ms, retry_ms, down_after,
                  csq_period_ms, csq_retry_ms, csq_timeout_ms, banner_marks):
         SlotDriver.__init__(self)
@@ -119,6 +138,10 @@ class AtDriver(SlotDriver):
             return
         if self._work(now):
             return
+        if self.time_period_ms and (self._time_at is None or ticks_diff(now, self._time_at) >= 0):
+            self._time_at = ticks_add(now, self.time_period_ms)
+            at.command(now, self.time_spec[0], _T_TIME, self.cmd_timeout_ms)
+            return
         if self._csq_at is None or ticks_diff(now, self._csq_at) >= 0:
             self.poll_signal(now)
 
@@ -136,6 +159,28 @@ class AtDriver(SlotDriver):
     def poll_signal(self, now):
         self._csq_at = ticks_add(now, self.csq_period_ms if self.signal_ok else self.csq_retry_ms)
         self.at.command(now, b"AT+CSQ", _T_CSQ, self.csq_timeout_ms)
+
+    def take_times(self):
+        """The time read since the last call, if any: a tuple of (EV_TIME, source, secs, ms, unc_ms, at)."""
+        f = self._fix
+        if f is None:
+            return ()
+        self._fix = None
+        return (f,)
+
+    def _time(self, line):
+        try:
+            t = self.parse_time(line)
+        except DecodeError:
+            self.stats["unexpected"] += 1
+            return
+        now = self._now
+        if t is None:
+            # no network time yet: ask again at the signal's pace
+            self._time_at = ticks_add(now, self.csq_period_ms)
+            return
+        spec = self.time_spec
+        self._fix = (_EV_TIME, spec[1], t[0], t[1], spec[2], now)
 
     def signal_soon(self, now):
         # read the signal before the next session (after a failed one)
@@ -201,7 +246,9 @@ class AtDriver(SlotDriver):
         if tag == _T_CONFIG:
             self._config_result(now, code, line)
             return
-        if tag != _T_CSQ:
+        if tag != _T_CSQ and tag != _T_TIME:
+            # (a modem without the time command answers ERROR: asked
+            # again only after time_period_ms)
             self._result(now, tag, code, line)
         if self._silent >= self.down_after and self._state == _S_UP:
             self.lost(now, "modem not answering")
@@ -222,6 +269,9 @@ class AtDriver(SlotDriver):
             want = self.steps[self._step][1]
             if want is not None and line.startswith(want):
                 self._step_seen = True
+            return
+        if tag == _T_TIME:
+            self._time(line)
             return
         if not self._info(tag, line):
             self.stats["unexpected"] += 1
@@ -275,6 +325,8 @@ class AtDriver(SlotDriver):
         self.at.reset()
         self._silent = 0
         self._state = _S_CONFIG
+        if self.time_period_ms:
+            self._time_at = None  # the time again once it is back
         self.start(now)
         self._lost(now, reason)
 

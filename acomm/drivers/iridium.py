@@ -27,6 +27,12 @@
 # AT+SBDMTA=1 at start-up) starts a session at once; with nothing to send
 # and no ring alert for mailbox_check_ms, an empty session checks the
 # mailbox (seed 000 section IV.F).
+#
+# Time: AT-MSSTM (Iridium system time, iridium_wire.parse_msstm) once the
+# modem is up, after each successful session (the unit has just been in
+# touch with the network) and every time_period_ms; "no network service"
+# asks again a minute later. Each answer is a time for the node's wall
+# clock (AtDriver.take_times), uncertain by 0.5 s.
 
 from .caps import Capabilities
 from ..compat import const, ticks_add, ticks_diff
@@ -47,6 +53,8 @@ _QUEUED = const(1)  # acomm.drivers.base
 _EV_RX = const(1)
 _EV_TX_DONE = const(2)
 _EV_TX_FAILED = const(4)
+
+_MSSTM_UNC_MS = const(500)  # acomm.drivers.iridium_wire: the uncertainty of an AT-MSSTM time
 
 # slot states after base's IDLE and QUEUED
 _WRITING = const(2)
@@ -76,6 +84,9 @@ class IridiumDriver(AtDriver):
     address = None
     broadcast_addr = None  # Iridium has no addresses, so no broadcast
     mo_prefix = b""
+    time_spec = (b"AT-MSSTM", "iridium", _MSSTM_UNC_MS)
+    time_period_ms = 3600000
+    time_epoch_s = None  # the era's epoch from 2020-01-01 UTC; None: era 3 (iridium_wire)
 
     def __init__(
         self,
@@ -104,6 +115,8 @@ class IridiumDriver(AtDriver):
         wb_tries=3,
         rb_tries=3,
         banner_marks=(),
+        time_period_ms=3600000,
+        time_epoch_s=None,
     ):
         if not 1 <= mo_mtu <= 1960 or not 1 <= mt_mtu <= 1890:
             raise AcommError("SBD messages are at most 1960 bytes MO and 1890 MT")
@@ -120,6 +133,10 @@ class IridiumDriver(AtDriver):
             self.address = address  # not used: Iridium does not address nodes
         if mo_prefix:
             self.mo_prefix = bytes(mo_prefix)
+        if time_period_ms != 3600000:
+            self.time_period_ms = time_period_ms  # 0: never ask
+        if time_epoch_s is not None:
+            self.time_epoch_s = time_epoch_s
         self.min_bars = min_bars
         self.mailbox_check_ms = mailbox_check_ms
         self.retry_first_ms = retry_first_ms
@@ -186,6 +203,9 @@ class IridiumDriver(AtDriver):
         return self._accept(now, _K_MO, addr, data)
 
     parse_signal = staticmethod(w.parse_csq)
+
+    def parse_time(self, line):
+        return w.parse_msstm(line, self.time_epoch_s)
 
     def _signal_ok(self, bars):
         return bars >= self.min_bars
@@ -352,6 +372,8 @@ class IridiumDriver(AtDriver):
                 self._mailbox_at = ticks_add(now, self.mailbox_check_ms)
                 self._idle_wait = 0
                 self._idle_at = None
+                if self.time_period_ms:
+                    self._time_at = now  # the time from the unit that has just heard the network
                 if mo_session:
                     s.state = _IDLE
                     self.stats["mo_sent"] += 1

@@ -94,3 +94,39 @@ def parse_status(line):
     if len(line) == 1 and 48 <= line[0] <= 57:
         return line[0] - 48
     return None
+
+
+# Iridium system time (AT-MSSTM): a count of 90 ms frames from the current
+# era's epoch, in hex, or "no network service" before the unit has
+# registered. Era 2 began 2014-05-11 14:23:55 UTC (RockBLOCK's -MSSTM page;
+# era 1: 2007-03-08 03:50:21, ISU AT Command Reference 7.17); its 32-bit
+# count would have run out in August 2026, and Iridium moved the network to
+# era 3, whose epoch is 2025-02-14 18:14:17 UTC (MetOcean's bulletin on the
+# re-epoch, rolled out from January 2026). The epoch is not broadcast: a
+# driver is told it (time_epoch_s, seconds from 2020-01-01 UTC).
+_ERA3_S = const(161720057)  # 2025-02-14 18:14:17 UTC from 2020-01-01 (era 2: -178018565)
+# the answer is sent within 4 frames of the count (0.36 s, ISU reference),
+# the count is a whole frame (0.09 s), and the line takes a few ms more
+_MSSTM_UNC_MS = const(500)
+
+
+def parse_msstm(line, epoch_s=None):
+    """'-MSSTM: <hex>' -> (secs from 2020-01-01 UTC, ms), None for 'no network service'; DecodeError else.
+    epoch_s: the era's epoch in seconds from 2020-01-01 UTC (None: era 3's)."""
+    if not line.startswith(b"-MSSTM:"):
+        raise DecodeError("not a -MSSTM line")
+    v = line[7:].strip()
+    if v.startswith(b"no network"):
+        return None
+    if not 1 <= len(v) <= 8:
+        raise DecodeError("bad -MSSTM count")
+    try:
+        # in two halves: a board keeps each product a small integer
+        hi = int(v[:-4], 16) if len(v) > 4 else 0
+        lo = int(v[-4:], 16)
+    except ValueError:
+        raise DecodeError("bad -MSSTM count")
+    # count * 90 ms = hi * 65536 * 90 ms + lo * 90 ms; 65536 frames = 5898.24 s
+    ms = hi * 240 + lo * 90
+    return (_ERA3_S if epoch_s is None else epoch_s) + hi * 5898 + ms // 1000, ms % 1000
+

@@ -28,6 +28,12 @@
 # +QIND, +QUSIM) follow it and are counted only. "+CPIN: <not READY>" (SIM
 # removed or failed) configures the modem again once the line is free, so
 # that the driver is down until AT+CPIN? says READY.
+#
+# Time: AT+CCLK? once the modem is up and every time_period_ms (0: never).
+# The modem's clock is the network's time (NITZ) where the network sends
+# it; a clock the network never set shows the unit's power-up date, taken
+# as no time (sms_wire.parse_cclk). Each time read goes to the node's wall
+# clock (AtDriver.take_times), uncertain by 2 s.
 
 from .caps import CAP_ADDRESSING, Capabilities
 from ..compat import const, ticks_add, ticks_diff
@@ -47,6 +53,7 @@ T_CMGR = const(11)
 T_CMGD = const(12)
 T_CMGL = const(13)
 
+_CCLK_UNC_MS = const(2000)  # acomm.drivers.sms_wire: the uncertainty of an AT+CCLK? time
 _TRIES = const(2)  # reads and deletes that time out are tried this often
 
 
@@ -57,6 +64,9 @@ class SmsDriver(AtDriver):
     not ready, EncodeError for a broadcast, an address without a number or
     a bad size.
     """
+
+    time_spec = (b"AT+CCLK?", "gsm", _CCLK_UNC_MS)
+    parse_time = staticmethod(w.parse_cclk)
 
     def __init__(
         self,
@@ -83,6 +93,7 @@ class SmsDriver(AtDriver):
         down_after=3,
         read_capacity=16,
         banner_marks=(b"RDY",),
+        time_period_ms=3600000,
     ):
         steps = [(b"ATE0Q0V1", None, None), (b"AT+CMEE=1", None, None),
                  (b"AT+CPIN?", b"+CPIN: READY", None), (b"AT+CMGF=%d" % (0 if pdu_mode else 1), None, None)]
@@ -97,6 +108,7 @@ class SmsDriver(AtDriver):
         AtDriver.__init__(self, steps, urcs, mtu, 400, 0, cmd_timeout_ms, retry_ms, down_after, csq_period_ms,
                           csq_retry_ms, csq_timeout_ms, banner_marks)
         self.address = address  # our own node id: the destination of what arrives
+        self.time_period_ms = time_period_ms
         self.broadcast_addr = None
         self.pdu_mode = pdu_mode
         self.smsc = smsc

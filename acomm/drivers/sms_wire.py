@@ -83,3 +83,44 @@ def cmgr_sender(line):
     t = after(line, b"+CMGR:")
     q = quoted(t, 1) if t is not None else None
     return q.decode() if q else None
+
+
+# The modem's clock, AT+CCLK? (3GPP TS 27.007 8.15): +CCLK: "yy/MM/dd,hh:mm:ss±zz",
+# local time, zz its offset from UTC in quarter hours (the sign and zone
+# may be missing: UTC). A modem whose clock the network never set (NITZ)
+# answers its power-up date: 2000/01/01, 2002/01/01, 2004/01/01 or
+# 1980/01/06 by make, counting from power-up. There is no standard way to
+# ask whether the network set it, so a date before 2024 (acomm.wallclock
+# MIN_S) is taken as "never set": parse_cclk gives None.
+_CCLK_UNC_MS = const(2000)  # whole seconds, and the network's time itself is only as good as a second or so
+
+
+def parse_cclk(line):
+    """'+CCLK: "yy/MM/dd,hh:mm:ss+zz"' -> (secs from 2020-01-01 UTC, 0), None when the modem's clock
+    was never set by the network; DecodeError for anything else."""
+    from ..civil import days2020
+    from ..wallclock import MIN_S
+
+    if not line.startswith(b"+CCLK:"):
+        raise DecodeError("not a +CCLK line")
+    v = line[6:].strip().strip(b'"')
+    try:
+        date, hms = v.split(b",")
+        y, mo, d = [int(x) for x in date.strip().split(b"/")]
+        hms = hms.strip()
+        tz = 0
+        for i in range(len(hms)):
+            c = hms[i]
+            if c == 43 or c == 45:  # "+", "-"
+                tz = int(hms[i + 1:]) * (-1 if c == 45 else 1)
+                hms = hms[:i]
+                break
+        h, m, s = [int(x) for x in hms.split(b":")]
+    except ValueError:
+        raise DecodeError("bad +CCLK time: %r" % (line[:40],))
+    if not (1 <= mo <= 12 and 1 <= d <= 31 and h < 24 and m < 60 and s < 61 and -96 <= tz <= 96):
+        raise DecodeError("bad +CCLK time: %r" % (line[:40],))
+    y += 2000 if y < 70 else 1900 if y < 100 else 0
+    secs = days2020(y, mo, d) * 86400 + h * 3600 + m * 60 + s - tz * 900
+    return (secs, 0) if secs >= MIN_S else None
+

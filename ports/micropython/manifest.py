@@ -31,6 +31,7 @@ package(
         "catalog/rovcontrol.py",
         "catalog/seaware.py",
         "catalog/teleop.py",
+        "civil.py",
         "codec/__init__.py",
         "codec/_crc16_table.py",
         "codec/_crc16_viper.py",
@@ -59,6 +60,7 @@ package(
         "drivers/evologics_notifications.py",
         "drivers/evologics_sequences.py",
         "drivers/evologics_wire.py",
+        "drivers/gps.py",
         "drivers/iridium.py",
         "drivers/iridium_wire.py",
         "drivers/mac.py",
@@ -109,6 +111,7 @@ package(
         "transport/routing.py",
         "transport/segment.py",
         "transport/store.py",
+        "wallclock.py",
     ],
     base_path="../..",
 )

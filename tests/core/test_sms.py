@@ -76,7 +76,7 @@ def test_text_mode_coding_and_the_lines_of_the_modem():
 
 # -- byte-exact --------------------------------------------------------------------------------
 def up_fed(pdu_mode=True):
-    f = Fed(SmsDriver(1, NUMBERS, pdu_mode=pdu_mode))
+    f = Fed(SmsDriver(1, NUMBERS, pdu_mode=pdu_mode, time_period_ms=0))
     assert f.poll() == b"ATE0Q0V1\r"
     assert f.answer(b"ATE0Q0V1\r\r\nOK\r\n") == b"AT+CMEE=1\r"
     assert f.answer(b"\r\nOK\r\n") == b"AT+CPIN?\r"

@@ -57,7 +57,7 @@ def script(pdu_mode):
 def play(pdu_mode, extra=None):
     # the script, with extra(i, chunk) -> chunk with lines put in; returns
     # the driver and its events; asserts every write is the script's
-    f = Fed(SmsDriver(1, NUMBERS, pdu_mode=pdu_mode))
+    f = Fed(SmsDriver(1, NUMBERS, pdu_mode=pdu_mode, time_period_ms=0))
     for i, (chunk, want) in enumerate(script(pdu_mode)):
         if chunk is None:
             out = f.poll()
@@ -98,7 +98,7 @@ def test_unsolicited_lines_anywhere_change_nothing():
 
 
 def up_fed():
-    f = Fed(SmsDriver(1, NUMBERS))
+    f = Fed(SmsDriver(1, NUMBERS, time_period_ms=0))
     for chunk, want in script(True)[:8]:
         assert (f.poll() if chunk is None else f.answer(chunk)) == want
     f.take()

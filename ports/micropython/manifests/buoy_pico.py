@@ -21,6 +21,7 @@ package(
         "catalog/caddy.py",
         "catalog/seaware.py",
         "catalog/teleop.py",
+        "civil.py",
         "codec/__init__.py",
         "codec/_crc16_table.py",
         "codec/_crc16_viper.py",
@@ -41,6 +42,7 @@ package(
         "drivers/atdriver.py",
         "drivers/base.py",
         "drivers/caps.py",
+        "drivers/gps.py",
         "drivers/iridium.py",
         "drivers/iridium_wire.py",
         "drivers/registry.py",
@@ -72,6 +74,7 @@ package(
         "transport/routing.py",
         "transport/segment.py",
         "transport/store.py",
+        "wallclock.py",
     ],
     base_path="../../..",
 )

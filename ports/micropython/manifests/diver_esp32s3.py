@@ -21,6 +21,7 @@ package(
         "catalog/caddy.py",
         "catalog/seaware.py",
         "catalog/teleop.py",
+        "civil.py",
         "codec/__init__.py",
         "codec/_crc16_table.py",
         "codec/_crc16_viper.py",
@@ -39,6 +40,7 @@ package(
         "drivers/__init__.py",
         "drivers/base.py",
         "drivers/caps.py",
+        "drivers/gps.py",
         "drivers/registry.py",
         "drivers/seatrac.py",
         "drivers/seatrac_sequences.py",
@@ -68,6 +70,7 @@ package(
         "transport/routing.py",
         "transport/segment.py",
         "transport/store.py",
+        "wallclock.py",
     ],
     base_path="../../..",
 )

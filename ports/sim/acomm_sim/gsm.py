@@ -38,12 +38,17 @@
 # slots; the network keeps what does not fit), plus acomm_sim.faults':
 # corrupt_next / truncate_next(b"+CMTI") etc., swallow_next(b"AT+CMGS"),
 # noise, reboot(now).
+#
+# The clock (AT+CCLK?, acomm_sim.gsm_general.Clock): the world's time from
+# wall0_s (seconds from 2020-01-01 UTC at now=0; default 2026-01-01) in
+# zone `tz` once registered, with network_time=True (default); with
+# network_time=False, the unit's RTC from 1980-01-06 at power-up.
 
 from acomm.compat import ticks_add, ticks_diff
 from acomm.drivers import sms_pdu as pdu
 
 from .atmodem import AtModem
-from .gsm_general import CLAC, SETTINGS, GeneralCommands, nums, split, toa
+from .gsm_general import CLAC, SETTINGS, Clock, GeneralCommands, nums, split, toa
 from .gsm_net import network_of
 
 _STAT_TEXT = (b"REC UNREAD", b"REC READ", b"STO UNSENT", b"STO SENT")
@@ -76,9 +81,16 @@ def _bcd2(v):
     return ((v % 10) << 4) | (v // 10)
 
 
-class GsmEmulator(GeneralCommands, AtModem):
+WALL0_S = 189388800  # 2026-01-01 00:00 UTC from 2020-01-01: the simulated world's time at now=0
+
+
+class GsmEmulator(GeneralCommands, Clock, AtModem):
     def __init__(self, medium, address=1, now=0, number=None, rssi=20, storage=20, send_ms=2000,
-                 data_timeout_ms=60000, boot_ms=2000, banner=(b"RDY",), power_up=None):
+                 data_timeout_ms=60000, boot_ms=2000, banner=(b"RDY",), power_up=None, wall0_s=WALL0_S,
+                 network_time=True, tz=0):
+        self.wall0_s = wall0_s
+        self.network_time = network_time
+        self.tz = tz
         AtModem.__init__(self, now, banner, boot_ms)
         self.power_up = POWER_UP[power_up] if isinstance(power_up, str) else power_up
         self._urc_q = []  # [when, line]: power-up lines still to come
@@ -111,6 +123,7 @@ class GsmEmulator(GeneralCommands, AtModem):
         self.cscs = b"IRA"
         self.cops_format = 0
         self.csmp = [17, 167, 0, 0]
+        self._reset_clock(self._now)
 
     def poll(self, now):
         AtModem.poll(self, now)
@@ -407,4 +420,4 @@ class GsmEmulator(GeneralCommands, AtModem):
 _OTHERS = {b"+CFUN": GsmEmulator._cfun, b"+CPIN": GsmEmulator._cpin, b"+CSQ": GsmEmulator._csq,
            b"+COPS": GsmEmulator._cops, b"+CNUM": GsmEmulator._cnum, b"+CSCA": GsmEmulator._csca,
            b"+CSCS": GsmEmulator._cscs, b"+CSMP": GsmEmulator._csmp, b"+CNMI": GsmEmulator._cnmi,
-           b"+CPMS": GsmEmulator._cpms}
+           b"+CPMS": GsmEmulator._cpms, b"+CCLK": GsmEmulator._cclk}

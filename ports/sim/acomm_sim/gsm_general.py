@@ -3,7 +3,8 @@
 # the settings of one number (AT+CMEE, +CREG, +CLIP ...), the radio
 # (AT+CFUN), the SIM (AT+CPIN), the signal (AT+CSQ), the operator
 # (AT+COPS), the own number (AT+CNUM), the character set (AT+CSCS), the
-# registration and its reports, and +CME ERROR as AT+CMEE says. A mixin of
+# registration and its reports, the clock (AT+CCLK), and +CME ERROR as
+# AT+CMEE says. A mixin of
 # GsmEmulator, which holds the state these read (rssi, cfun, creg, ...)
 # and the network; the SMS commands (27.005) are its own.
 
@@ -11,7 +12,7 @@ _CHARSETS = (b"IRA", b"GSM", b"UCS2", b"HEX")
 # AT+CLAC: the commands answered here, one a line without "AT", as SIM800
 # and EC2x list theirs
 CLAC = (b"&F", b"E", b"I", b"Q", b"V", b"Z", b"+CFUN", b"+CGMI", b"+CGMM", b"+CGMR", b"+CGREG", b"+CGSN", b"+CIMI",
-        b"+CLAC", b"+CLIP", b"+CMEE", b"+CMGD", b"+CMGF", b"+CMGL", b"+CMGR", b"+CMGS", b"+CNMI", b"+CNUM", b"+COPS",
+        b"+CCLK", b"+CLAC", b"+CLIP", b"+CMEE", b"+CMGD", b"+CMGF", b"+CMGL", b"+CMGR", b"+CMGS", b"+CNMI", b"+CNUM", b"+COPS",
         b"+CPIN", b"+CPMS", b"+CRC", b"+CREG", b"+CSCA", b"+CSCS", b"+CSMP", b"+CSQ", b"+CVHU", b"+GCAP", b"+GMI",
         b"+GMM", b"+GMR", b"+GSN")
 # settings of one number: name -> highest value (the attribute is the name
@@ -187,6 +188,102 @@ class GeneralCommands:
             self.reply(b"+CME ERROR: %d" % code)
         else:
             self.reply(b"+CME ERROR: " + _CME_TEXT.get(code, b"unknown"))
+
+# The clock, AT+CCLK (27.007 8.15): +CCLK: "yy/MM/dd,hh:mm:ss±zz", local
+# time in zone zz (quarter hours). While registered with network_time the
+# network has set it (NITZ): the simulated world's time (wall0_s + now, in
+# seconds from 2020-01-01 UTC), shown in zone `tz`; it keeps that time
+# after the registration is lost. Without network time, the unit's own RTC
+# from power-up at 1980-01-06 00:00:00 (as Quectel units start), or what
+# the host set with AT+CCLK="...". Power-up forgets all but the network's
+# next setting.
+RTC_POWER_UP_S = -14605 * 86400  # 1980-01-06 from 2020-01-01
+
+
+class Clock:
+    """The +CCLK half of GsmEmulator (a mixin: wall0_s, network_time, tz are the emulator's)."""
+
+    def _reset_clock(self, now):
+        self._nitz = False
+        self._rtc = (now, RTC_POWER_UP_S, 0)  # (at, secs then, zone)
+
+    def clock_secs(self, now):
+        # (secs from 2020-01-01 UTC, zone) the unit's clock shows now
+        if self.network_time and self.reg_stat() == 1:
+            self._nitz = True
+        if self._nitz:
+            return self.wall0_s + now // 1000, self.tz
+        at, secs, tz = self._rtc
+        return secs + (now - at) // 1000, tz
+
+    def _cclk(self, now, op, arg):
+        if op == b"?":
+            secs, tz = self.clock_secs(now)
+            self.reply(cclk_text(secs, tz))
+        elif op == b"=?":
+            pass
+        elif op == b"=":
+            from acomm.drivers.sms_wire import parse_cclk
+            from acomm.errors import DecodeError
+
+            try:
+                r = parse_cclk(b"+CCLK: " + arg)
+            except DecodeError:
+                self.cme(50)
+                return
+            if r is None:  # a date before 2024, taken as set all the same
+                r = (_raw_cclk(arg), 0)
+            tz = _zone(arg)
+            self._nitz = False
+            self._rtc = (now, r[0], tz)
+        else:
+            self.error()
+            return
+        self.ok()
+
+
+def _zone(arg):
+    q = arg.strip(b'"')
+    for i in range(len(q) - 1, 0, -1):
+        if q[i] in (43, 45):
+            return int(q[i + 1:]) * (-1 if q[i] == 45 else 1)
+        if q[i] == 58:  # ":"
+            break
+    return 0
+
+
+def _raw_cclk(arg):
+    # secs from 2020-01-01 UTC of a time the host set, any year
+    from acomm.civil import days2020
+
+    q = arg.strip(b'"')
+    date, hms = q.split(b",")
+    y, mo, d = [int(x) for x in date.split(b"/")]
+    h, m, s = [int(x) for x in hms[:8].split(b":")]
+    return days2020(2000 + y if y < 70 else 1900 + y, mo, d) * 86400 + h * 3600 + m * 60 + s - _zone(arg) * 900
+
+
+def civil(days):
+    """(year, month, day) of `days` from 2020-01-01 (the inverse of acomm.wallclock.days2020)."""
+    z = days + 737730  # days from 0000-03-01
+    era = z // 146097
+    doe = z - era * 146097
+    yoe = (doe - doe // 1460 + doe // 36524 - doe // 146096) // 365
+    doy = doe - (365 * yoe + yoe // 4 - yoe // 100)
+    mp = (5 * doy + 2) // 153
+    d = doy - (153 * mp + 2) // 5 + 1
+    m = mp + 3 if mp < 10 else mp - 9
+    return yoe + era * 400 + (1 if m <= 2 else 0), m, d
+
+
+def cclk_text(secs, tz=0):
+    """The +CCLK answer for secs from 2020-01-01 UTC, shown in zone tz (quarter hours)."""
+    local = secs + tz * 900
+    y, mo, d = civil(local // 86400)
+    t = local % 86400
+    return b'+CCLK: "%02d/%02d/%02d,%02d:%02d:%02d%s%02d"' % (
+        y % 100, mo, d, t // 3600, t // 60 % 60, t % 60, b"-" if tz < 0 else b"+", abs(tz))
+
 
 def split(c):
     # b"+CREG=1" -> (b"+CREG", b"=", b"1"); b"+CREG?" -> (.., b"?", b"");

@@ -54,7 +54,8 @@ def plain(sn, link):
     node = sn.node
     if sn.extra or sn.step != node.step:
         return None
-    if node._pumps.get(link.name) is not None:
+    io = node._io.get(link.name)  # [stream, frame pump or None, unsent]
+    if io is not None and io[1] is not None:
         return None
     d = link.driver
     if d.__class__ is MacDriver:

@@ -8,7 +8,7 @@
 # AT&K0/AT&K3, AT&W0, AT&F0, AT*R1, ATI<n>, AT+CGMI/+GMI, AT+CGMM/+GMM,
 # AT+CGMR/+GMR, AT+CGSN/+GSN, AT+CSQ, AT+CSQF, AT+CRIS, AT+CIER=..., AT+SBDAREG=<n>,
 # AT+SBDMTA=<0|1>, AT+SBDMTA?, AT+SBDWB=<n>, AT+SBDWT=<text>, AT+SBDRB,
-# AT+SBDRT, AT+SBDIX, AT+SBDIXA, AT+SBDD0/1/2, AT+SBDS, AT+SBDTC. Anything
+# AT+SBDRT, AT+SBDIX, AT+SBDIXA, AT+SBDD0/1/2, AT+SBDS, AT+SBDTC, AT-MSSTM. Anything
 # else: ERROR. Answers are framed as V.250 says for the mode the host set
 # (acomm_sim.atmodem; power-up: echo on, verbose): after the echo
 # "AT+SBDWB=5\r" comes "\r\nREADY\r\n"; after the data "\r\n0\r\n" and
@@ -26,11 +26,21 @@
 # (network.queue_mt), plus acomm_sim.faults': corrupt_next(b"SBDRB") damages
 # the block's checksum, corrupt_next / truncate_next(b"+SBDIX") the report,
 # swallow_next(b"AT+SBDIX") a command never answered, noise, reboot(now).
+#
+# AT-MSSTM: "-MSSTM: <hex>", the count of 90 ms frames since the era's
+# epoch (epoch_s, from 2020-01-01 UTC; default era 3's) at the simulated
+# world's time (wall0_s + now, seconds from 2020-01-01 UTC), in lower-case
+# hex without leading zeros; "-MSSTM: no network service" until the unit
+# has been registered (bars above 0 since power-up), as the real unit
+# before it has heard the network.
 
 from acomm.drivers import iridium_wire as w
 
 from .atmodem import AtModem
 from .iridium_net import network_of
+
+WALL0_S = 189388800  # 2026-01-01 00:00 UTC from 2020-01-01: the simulated world's time at now=0
+ERA3_S = 161720057  # 2025-02-14 18:14:17 UTC, era 3's epoch (acomm.drivers.iridium_wire)
 
 
 # what a 9602 answers to +CGMM, and (the first lines of) +CGMR; the hardware
@@ -41,7 +51,10 @@ REVISION = (b"Call Processor Version: TA19002", b"Hardware Version: BOOT07d2/960
 
 class IridiumEmulator(AtModem):
     def __init__(self, medium, address=1, now=0, imei=None, serial=None, bars=5, session_ms=8000,
-                 mo_max=w.MO_MAX, mt_max=w.MT_MAX, wb_timeout_ms=60000, csq_ms=0, boot_ms=2000, banner=()):
+                 mo_max=w.MO_MAX, mt_max=w.MT_MAX, wb_timeout_ms=60000, csq_ms=0, boot_ms=2000, banner=(),
+                 wall0_s=WALL0_S, epoch_s=ERA3_S):
+        self.wall0_s = wall0_s
+        self.epoch_s = epoch_s
         AtModem.__init__(self, now, banner, boot_ms)
         self.net = network_of(medium)
         self.address = address
@@ -68,6 +81,7 @@ class IridiumEmulator(AtModem):
         self.mt = b""
         self.ring = False  # an SBD ring alert since the last session (+CRIS sri)
         self._ring_due = False
+        self.registered = False  # has heard the network since power-up (-MSSTM)
 
     # -- faults ------------------------------------------------------------------------------
     def fail_sessions(self, code, count=1):
@@ -159,6 +173,15 @@ class IridiumEmulator(AtModem):
         elif c == b"+SBDS":
             self.reply(b"+SBDS: %d, %d, %d, %d" % (self.mo is not None, self.momsn, bool(self.mt),
                                                     self.mtmsn if self.mt else -1))
+            self.ok()
+        elif c == b"-MSSTM":
+            if self.bars > 0:
+                self.registered = True
+            if self.registered:
+                ms = (self.wall0_s - self.epoch_s) * 1000 + now
+                self.reply(b"-MSSTM: %x" % ((ms // 90) & 0xFFFFFFFF))
+            else:
+                self.reply(b"-MSSTM: no network service")
             self.ok()
         elif c == b"+SBDTC":
             self.mt = self.mo or b""
