@@ -48,7 +48,11 @@
 #    loops when nodes learn from stale replies. A broken hop's routes turn
 #    invalid, kept with their sequence numbers raised by one (as RFC 3561
 #    does) so that only fresher news restores them, and a route error names
-#    them when a repair fails. Bounded: at most `capacity` destinations; a new one takes the
+#    them when a repair fails. One exception: when the hop was this node's
+#    own (it stopped answering here, no error named it), hearing that hop
+#    again before news comes restores the route as it was, number included
+#    (search): on a busy acoustic channel most hops called broken are alive,
+#    and nothing was announced in between that the old route could loop on. Bounded: at most `capacity` destinations; a new one takes the
 #    place of an expired or invalid route first, else of the one used
 #    longest ago; refused (and counted) when every route is valid and used
 #    within a minute.
@@ -118,7 +122,7 @@ _LINK = const(1)  # the link's name
 _COST = const(2)
 _SEQ = const(3)  # destination sequence number, or -1 unknown
 _EXPIRES = const(4)  # ticks
-_VALID = const(5)
+_VALID = const(5)  # True; None: this node's own hop broke (search may revive it); False
 _USED = const(6)  # ticks last looked up or refreshed
 _DEAD = const(1 << 29)  # an eviction score above every live route's
 _KEEP_MS = const(60000)  # a live route used within this is never evicted
@@ -275,7 +279,7 @@ class Routing:
         self._rids = {}
         self.flooder = None  # acomm.transport.flood.Flooder, made by the first flood sent or heard
         self.stats = {"requests": 0, "rebroadcasts": 0, "replies": 0, "errors": 0, "bad": 0, "duplicates": 0,
-                      "refused": 0, "control_sent": 0, "control_bytes": 0, "control_dropped": 0, "replies_rerouted": 0}
+                      "refused": 0, "control_sent": 0, "control_bytes": 0, "control_dropped": 0, "replies_rerouted": 0, "revived": 0}
         self.finder = self.table = self
 
     # -- links and costs ------------------------------------------------------------------
@@ -364,7 +368,11 @@ class Routing:
             if named is not None:
                 r[_USED] = now  # an error's destinations are looked up
             if r[_NEXT] == hop and r[_LINK] == link_name:
-                r[_VALID] = False
+                # None: a hop of this node's own, which search() brings back if it is heard again
+                # (_EXPIRES keeps the moment); False: a neighbour's error, which only news undoes
+                r[_VALID] = None if named is None else False
+                if named is None:
+                    r[_EXPIRES] = now
                 if r[_SEQ] >= 0:
                     r[_SEQ] = (r[_SEQ] + 1) % _SEQ_MOD
                     if named is not None:
@@ -401,6 +409,24 @@ class Routing:
         """No link has a way to final: start (or keep) its search, unless a live route names it or
         the last search gave up within hold_ms (the packet waits either way)."""
         self._sync_links()
+        r = self.routes.get(final)
+        if r is not None and r[_VALID] is None:
+            # this node's own hop towards it was called broken (its _VALID None, _EXPIRES the
+            # moment): heard since, it was alive after all, only unheard for a while (its frames
+            # lost to collisions, or sent while this node was sending), as most such hops on a busy
+            # acoustic channel are. The route comes back as it was, and its search stops before it
+            # floods the network: its ring request is often what the hop is heard rebroadcasting
+            link = self.node_links.get(r[_LINK])
+            h = None if link is None else link.discovery.last_heard(r[_NEXT])
+            if h is not None and ticks_diff(h, r[_EXPIRES]) > 0:
+                r[_VALID] = True
+                if r[_SEQ] >= 0:
+                    r[_SEQ] = (r[_SEQ] - 1) % _SEQ_MOD  # the number broken() raised
+                r[_EXPIRES] = ticks_add(now, self.lifetime_ms)
+                r[_USED] = now
+                self._searches.pop(final, None)
+                self.stats["revived"] += 1
+                return
         if self.links and self.lookup(now, final) is None and final not in self._searches:
             self._searches[final] = [self.tries, now]
             self._retry(now)

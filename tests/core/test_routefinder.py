@@ -1,13 +1,14 @@
 # Route discovery without I/O (the searches of acomm.transport.routing) on
 # small networks of nodes joined by a fake medium: a chain found hop by hop,
 # every request rebroadcast at most once per node, a broken hop repaired
-# where it broke, the error of a repair that failed and the way round it,
+# where it broke (or brought back when its hop is heard again), the error
+# of a repair that failed and the way round it,
 # retries backing off, a search given up, bad bytes dropped, and no loops in
 # any table after random breaks and searches.
 
 from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.prng import Prng
-from acomm.transport.routing import BROADCAST, Routing
+from acomm.transport.routing import BROADCAST, Routing, encode_error
 from checks import adjacency
 
 T0 = TICKS_MAX - 20000
@@ -25,15 +26,25 @@ class _Names:
         return str(node_id)
 
 
+class _Heard:
+    # the part of a link's discovery that Routing reads: when each neighbour was last heard
+    def __init__(self):
+        self.last = {}
+
+    def last_heard(self, node_id):
+        return self.last.get(node_id)
+
+
 class _Link:
-    # a routing link as Routing sees it: its name and medium, no neighbour table yet, and its
-    # requests put on the fake medium as (sender, to, payload)
+    # a routing link as Routing sees it: its name and medium, no neighbour table yet, when each
+    # neighbour was last heard, and its requests put on the fake medium as (sender, to, payload)
     name = medium = "acoustic"
     neighbours = None
 
     def __init__(self, sent, node_id):
         self.sent = sent
         self.node_id = node_id
+        self.discovery = _Heard()
 
     def request(self, now, rid, dst, payload, lifespan_s, priority, ack=False, ftype=0):
         self.sent.append((self.node_id, BROADCAST if dst == "*" else int(dst), payload))
@@ -67,6 +78,7 @@ class Net:
             due, self.sent[:] = self.sent[:], []
             for n, to, payload in due:
                 for m in sorted(self.adj[n]):
+                    self.link[m].discovery.last[n] = self.now  # every frame in range is heard
                     if to == BROADCAST or to == m:
                         self.f[m].heard(self.now, self.link[m], n, payload)
             self.now = ticks_add(self.now, step)
@@ -138,6 +150,58 @@ def test_a_broken_hop_is_repaired_where_it_broke_and_sends_no_error():
     assert net.path(3, 4) == [3, 2, 1, 5, 6, 7, 4]
     assert net.path(1, 4) == [1, 5, 6, 7, 4]  # the fresher reply moved 1's route, with no loop
     assert all(f.stats["errors"] == 0 for f in net.f.values())
+
+
+def test_an_own_hop_heard_again_gets_its_routes_back_and_the_search_stops():
+    # 1-2-3-4: 2 calls 3 broken (its answers were lost), 3 is alive: a frame of it is heard (an
+    # advert, or its rebroadcast of 2's request), and the next search() call (the waiting
+    # packet's next poll) brings the route back as it was, number included: no more tries, no
+    # error
+    net = Net([(1, 2), (2, 3), (3, 4)], jitter_ms=0)
+    net.f[1].search(net.now, 4)
+    net.run(10000)
+    f = net.f[2]
+    before = f.routes[4][:]
+    assert f.lookup(net.now, 4)[0] == 3
+    f.broken(net.now, 3, "acoustic")
+    assert f.lookup(net.now, 4) is None and f.routes[4][3] == (before[3] + 1) % 65535
+    f.search(net.now, 4)  # the first try, sent at the next poll
+    assert f.searching(4) and f.stats["requests"] == 1
+    net.now = ticks_add(net.now, 100)
+    f.search(net.now, 4)  # nothing heard of 3 since: still broken
+    assert f.searching(4) and f.lookup(net.now, 4) is None
+    net.link[2].discovery.last[3] = net.now
+    net.now = ticks_add(net.now, 100)
+    f.search(net.now, 4)
+    assert not f.searching(4) and f.stats["revived"] == 1
+    r = f.lookup(net.now, 4)
+    assert r is not None and r[0] == 3 and f.routes[4][3] == before[3]
+    net.run(60000)
+    assert f.stats["requests"] == 1 and all(x.stats["errors"] == 0 for x in net.f.values())
+    assert net.path(1, 4) == [1, 2, 3, 4]
+
+
+def test_a_hop_not_heard_again_or_named_by_an_error_is_not_revived():
+    net = Net([(1, 2), (2, 3), (3, 4)], jitter_ms=0)
+    net.f[1].search(net.now, 4)
+    net.run(10000)
+    f = net.f[2]
+    f.broken(net.now, 3, "acoustic")
+    net.cut(2, 3)  # 3 is gone: nothing from it is heard
+    f.search(net.now, 4)
+    net.run(5000)
+    f.search(net.now, 4)
+    assert f.lookup(net.now, 4) is None and f.stats["revived"] == 0
+    # 1's route to 4 through 2, turned invalid by 2's error (not 1's own hop): 2 is heard again
+    # and again, but only news of 4 brings it back
+    g = net.f[1]
+    seq = g.routes[4][3]
+    g.heard(net.now, net.link[1], 2, encode_error([(4, (seq + 1) % 65535)]))
+    assert g.lookup(net.now, 4) is None
+    net.link[1].discovery.last[2] = ticks_add(net.now, 10)
+    net.now = ticks_add(net.now, 100)
+    g.search(net.now, 4)
+    assert g.lookup(net.now, 4) is None and g.stats["revived"] == 0
 
 
 def test_a_repair_that_gives_up_sends_the_error_and_the_source_goes_around():
