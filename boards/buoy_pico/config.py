@@ -35,4 +35,9 @@ CONFIG = {
          "options": {"mailbox_check_ms": 600000, "cost_tx": 0.02}},
     ],
     "station": None,  # a relay: it sends nothing of its own
+    # The wall clock (lifespans, key epochs) is set from the Iridium modem's
+    # AT-MSSTM. This board has no GPS wired; one on a spare UART would be
+    #   "gps": {"uart": <id>, "baud": 9600, "tx": <pin or None>, "rx": <pin>},
+    # (its NMEA RMC/ZDA sentences are read for the time only). The RP2040
+    # has two UARTs, both taken by the modems above, so it stays off here.
 }

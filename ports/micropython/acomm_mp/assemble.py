@@ -3,6 +3,11 @@
 # driver, the store-and-forward transport on the board's store, and the
 # station (acomm.apps.station) when the board sends reports by itself.
 #
+# The wall clock (acomm.wallclock): given the port's wall(), the node keeps
+# one clock that its drivers' times set (and a GPS's, with a `gps` entry),
+# its last good time in a file beside the store; the key and the transport
+# read that clock.
+#
 # The I/O comes in from outside, so the same assembly runs on a board
 # (acomm_mp.start: machine.UART, a store on flash, time.ticks_ms) and in
 # tests and the simulator (fake UARTs, a RAM store, a virtual clock):
@@ -21,7 +26,16 @@ from .runloop import Board
 
 
 def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None, say=print, make_report=None):
-    node = Node(cfg["name"], cfg["node_id"], clock, listener=listener)
+    st = cfg["storage"]
+    wc = None
+    if wall is not None:
+        from acomm.wallclock import WallClock
+
+        # the last good time beside the store, so a board without a
+        # battery clock never starts again earlier than it
+        wc = WallClock(wall, clock, st["path"] + ".clock" if st is not None and open_store is not None else None)
+        wall = wc.wall
+    node = Node(cfg["name"], cfg["node_id"], clock, listener=listener, wallclock=wc)
     for name in cfg["peers"]:
         node.names.add(name, cfg["peers"][name])
     a = cfg.get("auth")
@@ -29,10 +43,9 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         from acomm.apps.policy import commands
         from acomm.frame.auth import Auth
 
-        st = cfg["storage"]
         # the counters beside the store, so they survive a restart with it
         path = st["path"] + ".auth" if st is not None and open_store is not None else None
-        node.set_auth(Auth(a["key"], a["tag_len"], path, a["reserve"]), commands())
+        node.set_auth(Auth(a["key"], a["tag_len"], path, a["reserve"], wall), commands())
     for i, lk in enumerate(cfg["links"]):
         try:
             cls = driver_class(lk["modem"])
@@ -42,7 +55,12 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         opts = dict(lk["link"])
         opts["medium"] = lk["medium"]
         node.add_link(lk["name"], drv, open_uart(lk), **opts)
-    st = cfg["storage"]
+    g = cfg.get("gps")
+    if g is not None:
+        # imported only here: a board without a GPS never loads the reader
+        from acomm.drivers.gps import GpsReader
+
+        node.add_time_source(GpsReader(), open_uart(g))
     # no store: the transport keeps its packets in RAM (a MemoryStore)
     store = open_store(st) if st is not None and open_store is not None else None
     # routing: None (absent) loads nothing of the route finder; True or a dict: learned routes

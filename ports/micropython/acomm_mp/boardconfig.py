@@ -32,6 +32,9 @@
 #                 baud, tx and rx pins (None: the board's default), address
 #                 (default node_id), medium, link (Link options), options
 #                 (driver options)
+#   gps           absent or None, or {"uart", "baud" (9600), "tx", "rx",
+#                 "rxbuf" (256)}: a GPS receiver's NMEA output on its own
+#                 UART, read for the time only (acomm.drivers.gps)
 #   station       None, or {"report_to", "report_period_s", "alarm_to"}:
 #                 what acomm.apps.station.Station sends by itself
 #   web           absent, None, or {"host" (default loopback), "port" (80),
@@ -198,6 +201,21 @@ def _web(w):
             "max_streams": _int(w, "max_streams", 1, 8, "web.max_streams", 2)}
 
 
+def _gps(g):
+    # a GPS receiver's UART (acomm.drivers.gps reads its time); the same
+    # fields as a link's UART
+    if g is None:
+        return None
+    if not isinstance(g, dict):
+        _fail("gps", "a dict or None", g)
+    for k in g:
+        if k not in ("uart", "baud", "tx", "rx", "rxbuf"):
+            _fail("gps", "uart, baud, tx, rx, rxbuf", k)
+    return {"uart": _int(g, "uart", 0, 9, "gps.uart"), "baud": _int(g, "baud", 300, 4000000, "gps.baud", 9600),
+            "tx": _pin(g, "tx", "gps.tx"), "rx": _pin(g, "rx", "gps.rx"),
+            "rxbuf": _int(g, "rxbuf", 64, 65536, "gps.rxbuf", 256)}
+
+
 def check(cfg):
     if not isinstance(cfg, dict):
         _fail("CONFIG", "a dict", cfg)
@@ -267,10 +285,15 @@ def check(cfg):
         sta = s
     out["station"] = sta
     out["auth"] = _auth(cfg.get("auth"))
+    g = _gps(cfg.get("gps"))
+    if g is not None:  # absent otherwise, as web
+        if g["uart"] in [lk["uart"] for lk in out["links"]]:
+            _fail("gps.uart", "a UART no link uses", g["uart"])
+        out["gps"] = g
     w = _web(cfg.get("web"))
     if w is not None:  # absent otherwise: the buoy's checked config stays as it was
         out["web"] = w
     for k in cfg:
-        if k not in out and k not in ("web", "mpy_lines", "routing"):
+        if k not in out and k not in ("web", "mpy_lines", "routing", "gps"):
             _fail("CONFIG", "known fields only", k)
     return out
