@@ -25,6 +25,7 @@ from acomm.errors import AcommError, StoreError, StoreFull
 from acomm.events import AVAILABLE
 from acomm.link import BROADCAST
 from acomm.node import Node
+from acomm.wallclock import WallClock
 
 from ..console import nodeloop
 from ..modems import DRIVERS, ModemError, ModemSpecError, add_known, hostport, keyval, load_key, open_store, parse_value
@@ -169,6 +170,27 @@ def _store_lines(store, out):
     return store
 
 
+_EPOCH_2020 = 1577836800  # time.time() at 2020-01-01 00:00 UTC: the wall clock's fixes count from there
+
+
+def _clock_lines(node, out):
+    # node.step, and a line each time the wall clock's source changes
+    # ("none": the host's clock; "iridium", "gsm": a modem told the time)
+    said = [node.wallclock.source]
+
+    def step(now=None):
+        r = node.step(now)
+        wc = node.wallclock
+        if wc.source != said[0]:
+            said[0] = wc.source
+            unc = wc.uncertainty_ms()
+            out.emit({"event": "clock", "source": wc.source,
+                      "text": "wall clock from %s (+-%d ms)" % (wc.source, unc or 0)})
+        return r
+
+    return step
+
+
 def main(args):
     """`acomm node`: exit 0 at the end, 2 for a usage error, 1 when a link cannot be opened or started."""
     from ..hosttransport import HostTransport
@@ -191,7 +213,8 @@ def main(args):
         for spec in args.iridium:
             parse_shore(spec)
         key = load_key(args.key_file) if args.key_file is not None else None
-        node = Node(args.name, args.id)
+        # the host's clock until a modem tells the time (AT-MSSTM, AT+CCLK?)
+        node = Node(args.name, args.id, wallclock=WallClock(epoch_s=_EPOCH_2020))
         add_known(node, args.known)
         log = nodeloop.open_log(args.log)
     except (AcommError, ValueError) as e:
@@ -204,7 +227,8 @@ def main(args):
     closers = []
     try:
         if key is not None:
-            node.set_auth(Auth(key, args.tag_len, args.auth_counters), commands(), strict=not args.auth_open)
+            node.set_auth(Auth(key, args.tag_len, args.auth_counters, wall=node.wallclock.wall), commands(),
+                          strict=not args.auth_open)
         ports = _ip_links(args, node, out)
         closers += ports
         streams, watches, wheres = _modem_links(args, node)
@@ -219,7 +243,7 @@ def main(args):
             return 2
         if store is not None:
             closers.append(store)
-        transport = HostTransport.of(node, store=store)
+        transport = HostTransport.of(node, store=store, wall=node.wallclock.wall)
         if args.inbox:
             import os
 
@@ -236,7 +260,7 @@ def main(args):
                 out.emit({"event": "error", "error": "not sent: %s was never heard" % dst})
 
         # typed lines, the --send list and the page's commands, one at a time
-        return nodeloop.session("acomm node", args, node, out, console, node.step, watches, ports, closers,
+        return nodeloop.session("acomm node", args, node, out, console, _clock_lines(node, out), watches, ports, closers,
                                 send_pending, after=never_heard)
     except ModemSpecError as e:
         print("acomm node: %s" % e, file=sys.stderr)
