@@ -278,11 +278,10 @@ class Link:
         if len(data) > mtu:
             return self._refuse(req_id, "%d bytes exceed the %s MTU of %d" % (len(data), self.name, mtu))
         req = TxRequest(req_id, dst_id, priority, ticks_add(now, life_ms), bytes(data))
-        # retries left (a broadcast cannot be acknowledged), sequence number, frame type, the
-        # counter its first copy was sealed with (every copy carries it: acomm.frame.auth), and
-        # when its first copy left
+        # retries left (a broadcast cannot be acknowledged), sequence number, frame type, and the
+        # counter its first copy was sealed with (every copy carries it: acomm.frame.auth)
         req.meta = [(self.max_retries if retries is None else retries) if (ack and dst_id is not None) else -1, seq, ftype,
-                    0, None]
+                    0]
         return self._enqueue(req, now)
 
     def _enqueue(self, req, now):
@@ -391,13 +390,7 @@ class Link:
         return self.driver.take_output()
 
     def _retry_or_fail(self, req, now, reason):
-        t = req.meta[4]
-        if self.framing.auth is None and t is not None and ticks_diff(now, t) >= self.dup_window_ms:
-            # without a key the receiver's duplicate filter is all that knows a copy: a copy
-            # later than its window would be carried out again (with a key every copy carries
-            # the first one's counter, and the counter window refuses it however late)
-            self._final(req, _FAILED, reason + "; no copy after the receiver's duplicate window")
-        elif req.meta[0] > 0:
+        if req.meta[0] > 0:
             req.meta[0] -= 1
             self.stats["retries"] += 1
             out = self.queue.push(req, now)
@@ -469,6 +462,7 @@ class Link:
             ping_next(self, now)
             return
         want_ack = req.meta[0] >= 0
+        a = self.framing.auth
         # a retry keeps its sequence number so the receiver can drop the copy
         seq = req.meta[1]
         if seq is None:
@@ -478,7 +472,6 @@ class Link:
                     seq = self._next_seq(req.dst)
             req.meta[1] = seq
         flags = fr.F_ACK_REQ if (want_ack and not self.modem_acks) else 0
-        a = self.framing.auth
         try:
             addr, data = self.framing.encode(req.meta[2], req.dst, seq, req.data, flags, req.meta[3])
             fl.handle = d.send(now, addr, data, want_ack and self.modem_acks)
@@ -486,12 +479,9 @@ class Link:
             fl.clear()
             self._final(req, _FAILED, "driver refused the frame: %s" % e)
             return
-        if want_ack:
+        if want_ack and a is not None:
             # a resend is the same frame: same counter, same tag (sealed once)
-            if a is not None:
-                req.meta[3] = a.last
-            if req.meta[4] is None:
-                req.meta[4] = now
+            req.meta[3] = a.last
         fl.kind = _K_DATA
         fl.seq = seq
         fl.dst_id = req.dst
@@ -594,7 +584,30 @@ class Link:
                 self._pending_acks.append((src, f.seq, f.ctr))
             return
         if f.ftype == fr.ACK and f.flags & fr.F_AUTH:
-            self._on_sealed_ack(now, f, src, dst)
+            # A sealed ACK carries no counter: its tag is bound to the counter the request was
+            # sealed with, so it is checked against the request it would confirm (a recording
+            # of it confirms only that request again). Inline: a method costs the board heap
+            if dst != self.node_id:
+                self.stats["rx_not_for_us"] += 1
+                return
+            fl = self._fl
+            if fl.state == _SENDING and fl.kind == _K_DATA and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
+                req = fl.req  # the ack beat our own end-of-transmission estimate
+            else:
+                req = self._acks.by_ack(src, f.seq, False)
+            if req is None:
+                return  # late: the request is settled
+            if not self.framing.auth.ack_tag(src, dst, f.seq, req.meta[3], f.payload):
+                self.stats["rx_bad"] += 1
+                if self.guard is not None:
+                    self.guard.count("ack")
+                return
+            self._heard(src, now)
+            if req is fl.req:
+                fl.canceled = True  # the slot frees at EV_TX_DONE
+            else:
+                self._acks.by_req_id(req.req_id)
+            self._final(req, _DELIVERED)
             return
         g = self.guard
         if g is not None and not f.authed and g.strict:
@@ -681,32 +694,6 @@ class Link:
               f.payload)
         # with a key, whether the frame's tag verified
         self._emit(ev if self.guard is None else ev + (f.authed,))
-
-    def _on_sealed_ack(self, now, f, src, dst):
-        # A sealed ACK carries no counter: its tag is bound to the counter the
-        # request was sealed with, so it is checked against the request it
-        # would confirm (a recording of it confirms only that request again)
-        if dst != self.node_id:
-            self.stats["rx_not_for_us"] += 1
-            return
-        fl = self._fl
-        if fl.state == _SENDING and fl.kind == _K_DATA and not fl.canceled and fl.dst_id == src and fl.seq == f.seq:
-            req = fl.req  # the ack beat our own end-of-transmission estimate
-        else:
-            req = self._acks.by_ack(src, f.seq, False)
-        if req is None:
-            return  # late: the request is settled
-        if not self.framing.auth.ack_tag(src, dst, f.seq, req.meta[3], f.payload):
-            self.stats["rx_bad"] += 1
-            if self.guard is not None:
-                self.guard.count("ack")
-            return
-        self._heard(src, now)
-        if req is fl.req:
-            fl.canceled = True  # the slot frees at EV_TX_DONE
-        else:
-            self._acks.by_req_id(req.req_id)
-        self._final(req, _DELIVERED)
 
     # -- ranging (seed 000's ranging request and range received) ------------------
     def range(self, now, req_id, names, lifespan_s, priority=2):

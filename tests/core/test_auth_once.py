@@ -10,7 +10,7 @@ from acomm import frame as fr
 from acomm.apps.policy import commands
 from acomm.catalog import teleop
 from acomm.drivers.caps import CAP_ADDRESSING, CAP_BROADCAST
-from acomm.events import DELIVERED, EV_RECEIVED, FAILED
+from acomm.events import DELIVERED, EV_RECEIVED
 from acomm.frame.auth import Auth
 from acomm.link import Link
 from acomm.link.names import NameTable
@@ -237,17 +237,3 @@ def test_a_delivered_sealed_frame_is_on_file_before_the_application_has_it():
             drv.receive(1, 2, data)
         auv.poll(9000000)
         assert _received(rec) == []
-
-
-def test_without_a_key_no_copy_leaves_after_the_receivers_duplicate_window():
-    drv, rec, link = _link(1, None, LINK_ACKS)
-    link.request(0, 1, "auv", b"hi", 600, ack=True, retries=100)
-    t = 0
-    while rec.final(1) is None and t < 200000:
-        link.poll(t)
-        if drv.busy is not None:
-            drv.finish()
-        t += 1000
-    assert rec.final(1) == FAILED and "duplicate window" in rec.reasons(1)[-1]
-    assert len(drv.sent) <= 60000 // link.ack_timeout_ms + 1
-    check_exactly_one_final(rec, [1])
