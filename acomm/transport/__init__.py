@@ -50,7 +50,7 @@
 from . import segment as sg
 from .arq import Outgoing, Reassembly
 from ..compat import const, ticks_add, ticks_diff
-from ..errors import AcommError, DecodeError, StoreFull
+from ..errors import AcommError, DecodeError, StoreError, StoreFull
 from .packetstore import PacketStore, key_of
 from .route import MEDIUM_ALL, Router
 
@@ -195,13 +195,14 @@ class Transport:
                          medium)
         try:
             p.pid = self.packets.next_pid()
-        except StoreFull:
+        except StoreError:
             # refused below; the id is not reserved, but nothing went out with it
             p.pid = self.packets.pid = (self.packets.pid + 1) & 0xFFFF
         self.stats["sent"] += 1
-        if not self._keep(p):
+        why = self._keep(p)
+        if why is not None:
             self.stats["failed"] += 1
-            self._emit((_EV_PACKET_STATUS, p.pid, _FAILED, "store full"))
+            self._emit((_EV_PACKET_STATUS, p.pid, _FAILED, why))
             return p.pid
         self._status(p, _QUEUED, "")
         return p.pid
@@ -235,21 +236,25 @@ class Transport:
         return p
 
     def _keep(self, p):
-        # -> False when the store's overflow rule refuses the packet
+        # -> None when kept, else why not: "store full" (the overflow rule, or no room on the
+        # file system), or what else the store said (an I/O error, a file system gone read-only)
         if not self.packets.room(p):
             self.stats["store_full"] += 1
-            return False
+            return "store full"
         try:
             self.packets.put(p)
         except StoreFull:
             self.stats["store_full"] += 1
-            return False
+            return "store full"
+        except StoreError as e:
+            self.stats["store_full"] += 1
+            return str(e)
         # from now on the body is in the store only, read back while the
         # packet is sent: a buoy holding packets while its uplink is down
         # keeps their headers in RAM, not their bodies
         p.body = None
         self._queue(p)
-        return True
+        return None
 
     def _queue(self, p):
         if p.medium != MEDIUM_ALL:
@@ -729,7 +734,7 @@ class Transport:
                 # custody, even of a packet of ours that a routing loop brought back after a relay
                 # took it: its origin (this node) heard `transmitted` then, and hears nothing more
                 p.relayed = True
-                if not self._keep(p):
+                if self._keep(p) is not None:
                     return False
                 self.stats["relayed"] += 1
                 self._remember(origin, h.pid, life)
@@ -809,7 +814,7 @@ class Transport:
     def _save_done(self):
         try:
             self.packets.save_done(self._done)
-        except StoreFull:  # its room is kept; a store that still says no costs only the memory
+        except StoreError:  # its room is kept; a store that still says no costs only the memory
             self.stats["store_full"] += 1
 
     def _sack(self, now, link, src, seg, tries=0):

@@ -32,7 +32,7 @@
 # expired.
 
 from ..compat import const
-from ..errors import StoreFull
+from ..errors import StoreError, StoreFull
 
 _HDR = const(11)
 _META = const(0xFFFFFF)
@@ -100,7 +100,10 @@ class StoredBlob:
                 take = self.chunk - a
                 if take > end - off:
                     take = end - off
-            rec = self.store.get((i << 24) | self.key)
+            try:
+                rec = self.store.get((i << 24) | self.key)
+            except StoreError:  # unreadable now (an I/O error): as if gone
+                return None
             if rec is None or len(rec) < a + take:
                 return None
             out += rec[a : a + take]
@@ -172,7 +175,7 @@ class PacketStore:
                 a = first + (i - 1) * self.chunk
                 self.store.put((i << 24) | key, body[a : a + self.chunk])
             self.store.put(key, head + body[:first])
-        except StoreFull:
+        except StoreError:  # full, or an I/O error: no chunk of it stays
             for i in range(1, chunks):
                 self.store.delete((i << 24) | key)
             raise
@@ -186,13 +189,19 @@ class PacketStore:
             self.store.delete((i << 24) | key)
 
     def body(self, key):
-        """The stored body of the packet with this key, read back from the store; None when it is gone or damaged."""
-        s = self._load(key, True)
+        """The stored body of the packet with this key, read back from the store; None when it is gone, damaged or unreadable."""
+        try:
+            s = self._load(key, True)
+        except StoreError:
+            return None
         return None if s is None else s.body
 
     def blob(self, key, head):
-        """The packet with this key as sent, head then its body, which stays in the store (StoredBlob); None when a record of it is gone."""
-        s = self._load(key, False)
+        """The packet with this key as sent, head then its body, which stays in the store (StoredBlob); None when a record of it is gone or unreadable."""
+        try:
+            s = self._load(key, False)
+        except StoreError:
+            return None
         if s is None:
             return None
         b = StoredBlob()

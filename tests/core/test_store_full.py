@@ -72,3 +72,22 @@ def test_a_relay_on_a_full_disk_refuses_and_the_sender_keeps_the_packet():
         assert packets(b)[0][1:] == ("diver", "buoy", data)
         assert statuses(a, pid) == [QUEUED, TRANSMITTED]
         st.close()
+
+
+def test_a_send_the_store_cannot_write_for_another_reason_says_that_reason():
+    # an I/O error (EIO) on the packet's record: the send ends failed with the store's own
+    # words, the node goes on, and the next send goes through
+    with TempDir() as d:
+        fs = FaultFS()
+        st = Store(d.file("diver"), capacity_bytes=32768, max_record=256, opener=fs.open)
+        w, a, b, _, ta = net(stores={"diver": st})
+        p0 = ta.send(w.now(), "buoy", Prng(3).bytes(100), 3600, 5)  # the packet ids' record is written
+        fs.fail = 5
+        p1 = ta.send(w.now(), "buoy", Prng(4).bytes(100), 3600, 5)
+        why = _reason(a, p1)
+        assert statuses(a, p1) == [FAILED] and len(why) == 1 and why[0] != "store full", why
+        assert ta.pending() == [p0]
+        p2 = ta.send(w.now(), "buoy", Prng(5).bytes(100), 3600, 5)
+        assert w.run(600000, until=lambda: DELIVERED in statuses(a, p2) and DELIVERED in statuses(a, p0))
+        assert len(packets(b)) == 2
+        st.close()
