@@ -7,8 +7,8 @@
 # - It is an offset plus the port's ticks: wall() = anchor + elapsed ticks,
 #   in the port's wall units (seconds; a board counts from 2020-01-01,
 #   CPython from 1970: epoch_s is the port's value of 2020-01-01 00:00 UTC).
-# - Before any source ("none") it follows the port's wall(): re-read once a
-#   second, a port clock that moved forward by 2 s or more is a step; one
+# - Before any source ("none") it follows the port's wall(): re-read at each
+#   poll (the node's step), a port clock that moved forward by 2 s or more is a step; one
 #   that went back is not followed. With host=True (a PC whose clock is set
 #   by NTP) it does the same for ever, as source "host", and fixes from the
 #   drivers never move it.
@@ -24,11 +24,12 @@
 #   on_step(fn) listener with fn(delta_s) (the transport moves the expiry of
 #   the packets it timed before the step).
 # - With a path, the last good time is written there at most once per hour
-#   of uptime and on each accepted step of 2 s or more, and the clock
+#   of uptime and a minute after each accepted step of 2 s or more (at most
+#   once per hour plus once per step), and the clock
 #   starts no earlier than it after a reboot (a board without a battery RTC
 #   would start again at its power-up date).
 
-from .compat import const, ticks_diff, ticks_ms
+from .compat import const, ticks_add, ticks_diff, ticks_ms
 
 # 2024-01-01 00:00 UTC in seconds from 2020-01-01: an earlier fix is a
 # modem's power-up date (2000, 2002, 2004, 1980), not the time
@@ -38,7 +39,7 @@ _TOL_MS = const(1000)  # beyond both uncertainties: the poll loop, the line's tr
 _CONFIRM_MS = const(5000)  # a confirming fix of the same source comes this much later
 _SAVE_MS = const(3600000)  # at most one write of the time file per hour
 _STEP_SAVE_S = const(2)
-_PORT_MS = const(1000)  # how often the port's clock is read again (no source)
+_STEP_SAVE_MS = const(60000)  # a step is written this long after it
 _REBASE_MS = const(1 << 27)  # re-anchor before ticks_diff runs out (2**29 on a board)
 _DRIFT_PPM = const(100)  # a crystal's drift: the uncertainty grows 0.1 ms a second
 
@@ -55,9 +56,7 @@ class WallClock:
     _cand = None  # a big step waiting for its confirmation: (s, ms, t, unc, source)
     _unc = 0  # the last fix's uncertainty, at the anchor's ticks
     _ms = 0
-    # counters: fixes waiting for a confirmation, writes of the time file
-    pending = 0
-    saves = 0
+    saves = 0  # writes of the time file
 
     def __init__(self, wall=None, ticks=None, path=None, epoch_s=0, host=False):
         """wall() -> the port's seconds; ticks() -> ms; path: the last good time's file (or None);
@@ -87,7 +86,6 @@ class WallClock:
         self._s = s
         self._t = now
         self._last = s
-        self._port_t = now
         self._saved_t = now
 
     # -- reading --------------------------------------------------------------------
@@ -138,10 +136,8 @@ class WallClock:
             c = self._cand
             if c is None or not _near(s, ms, now, c[0], c[1], c[2], c[3] + unc_ms + _TOL_MS):
                 self._cand = (s, ms, now, unc_ms, source)
-                self.pending += 1
                 return False
             if c[4] == source and ticks_diff(now, c[2]) < _CONFIRM_MS:
-                self.pending += 1
                 return False  # the same source, too soon: the same glitch told twice
         before = self._read(now)
         self._s = s
@@ -161,13 +157,14 @@ class WallClock:
         if s > before:
             for fn in self._listeners:
                 fn(s - before)
-            if s - before >= _STEP_SAVE_S:
-                self._save(now, s)
+            if s - before >= _STEP_SAVE_S and self.path is not None:
+                # written a minute later (poll), not in the middle of the
+                # step that brought the fix: a board's heap is busiest then
+                self._saved_t = ticks_add(now, _STEP_SAVE_MS - _SAVE_MS)
 
     def poll(self, now):
         """The node's step: the port's clock read again (no source yet), the hourly save."""
-        if (self.source == "none" or self.source == "host") and ticks_diff(now, self._port_t) >= _PORT_MS:
-            self._port_t = now
+        if self.source == "none" or self.source == "host":
             w = int(self._port())
             before = self._read(now)
             if w >= before + _STEP_SAVE_S:

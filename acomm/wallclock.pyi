@@ -8,7 +8,6 @@ class WallClock:
     path: Optional[str]
     epoch_s: int
     source: str
-    pending: int
     saves: int
     def __init__(
         self,

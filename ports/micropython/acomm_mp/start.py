@@ -18,10 +18,13 @@ from . import release
 # packet's expiry took 32 B of heap more. From 2020 it stays a small integer
 # until 2054. A clock never set reads earlier (a Pico's starts at 2021, an
 # ESP32's at 2000, the qemu board's at 1970): those seconds are used as
-# they are, small and never negative, and the count jumps when the clock is
-# set, as time.time() itself does. Expiries are this node's own (a relay is
-# told the lifespan left), so only a store written with 1970's epoch sees
-# its packets live on until they are delivered.
+# they are, small and never negative. The node's wall clock
+# (acomm.wallclock, built in acomm_mp.assemble) starts from this, no
+# earlier than the last good time it wrote beside the store, and is set
+# from the sky (Iridium AT-MSSTM, a GPS); it never goes back. Expiries are
+# this node's own (a relay is told the lifespan left), so only a store
+# written with 1970's epoch sees its packets live on until they are
+# delivered.
 _EPOCH = const(1577836800)
 
 
