@@ -50,7 +50,7 @@
 from . import segment as sg
 from .arq import Outgoing, Reassembly
 from ..compat import const, ticks_add, ticks_diff
-from ..errors import AcommError, DecodeError, StoreError, StoreFull
+from ..errors import AcommError, DecodeError, StoreFull
 from .packetstore import PacketStore, key_of
 from .route import MEDIUM_ALL, Router
 
@@ -195,7 +195,7 @@ class Transport:
                          medium)
         try:
             p.pid = self.packets.next_pid()
-        except StoreError:
+        except AcommError:  # StoreFull, or another StoreError (no name of its own here: the buoy's heap)
             # refused below; the id is not reserved, but nothing went out with it
             p.pid = self.packets.pid = (self.packets.pid + 1) & 0xFFFF
         self.stats["sent"] += 1
@@ -246,7 +246,7 @@ class Transport:
         except StoreFull:
             self.stats["store_full"] += 1
             return "store full"
-        except StoreError as e:
+        except AcommError as e:  # another StoreError: an I/O error, a file system gone read-only
             self.stats["store_full"] += 1
             return str(e)
         # from now on the body is in the store only, read back while the
@@ -814,7 +814,7 @@ class Transport:
     def _save_done(self):
         try:
             self.packets.save_done(self._done)
-        except StoreError:  # its room is kept; a store that still says no costs only the memory
+        except AcommError:  # StoreFull or another StoreError; its room is kept; a store that still says no costs only the memory
             self.stats["store_full"] += 1
 
     def _sack(self, now, link, src, seg, tries=0):

@@ -32,7 +32,7 @@
 # expired.
 
 from ..compat import const
-from ..errors import StoreError, StoreFull
+from .. import errors  # one name in this module's dict, not two (the buoy's heap)
 
 _HDR = const(11)
 _META = const(0xFFFFFF)
@@ -102,7 +102,7 @@ class StoredBlob:
                     take = end - off
             try:
                 rec = self.store.get((i << 24) | self.key)
-            except StoreError:  # unreadable now (an I/O error): as if gone
+            except errors.StoreError:  # unreadable now (an I/O error): as if gone
                 return None
             if rec is None or len(rec) < a + take:
                 return None
@@ -156,9 +156,9 @@ class PacketStore:
         # raises StoreFull (nothing of the packet stays then)
         n, chunks = self._sizes(p)
         if chunks > 255:
-            raise StoreFull("packet of %d bytes needs more than 255 records" % p.size)
+            raise errors.StoreFull("packet of %d bytes needs more than 255 records" % p.size)
         if not self.room(p, True):
-            raise StoreFull("store full")
+            raise errors.StoreFull("store full")
         p.chunks = chunks
         flags = (_F_COMPRESSED if p.compressed else 0) | (_F_MEDIUM if p.medium else 0)
         e = p.expiry & 0xFFFFFFFF
@@ -175,7 +175,7 @@ class PacketStore:
                 a = first + (i - 1) * self.chunk
                 self.store.put((i << 24) | key, body[a : a + self.chunk])
             self.store.put(key, head + body[:first])
-        except StoreError:  # full, or an I/O error: no chunk of it stays
+        except errors.StoreError:  # full, or an I/O error: no chunk of it stays
             for i in range(1, chunks):
                 self.store.delete((i << 24) | key)
             raise
@@ -192,7 +192,7 @@ class PacketStore:
         """The stored body of the packet with this key, read back from the store; None when it is gone, damaged or unreadable."""
         try:
             s = self._load(key, True)
-        except StoreError:
+        except errors.StoreError:
             return None
         return None if s is None else s.body
 
@@ -200,7 +200,7 @@ class PacketStore:
         """The packet with this key as sent, head then its body, which stays in the store (StoredBlob); None when a record of it is gone or unreadable."""
         try:
             s = self._load(key, False)
-        except StoreError:
+        except errors.StoreError:
             return None
         if s is None:
             return None
