@@ -169,7 +169,17 @@ class Transport:
         to the node (acomm.node.Node.attach) -> the Transport. options: as for Transport()."""
         t = cls(node.node_id, node.names, node.links, node.next_req_id, node.emit, **options)
         node.attach(t)
+        if node.wallclock is not None:
+            node.wallclock.on_step(t.clock_stepped)
         return t
+
+    def clock_stepped(self, delta_s):
+        """The wall clock stepped forward by delta_s (acomm.wallclock: a first fix, a port clock set
+        forward): every packet held keeps the time it had left, so none expires early for it."""
+        # one whose expiry came from before this run (the store) gets the step too: it then lives
+        # longer than its lifespan by what the clock was behind, never shorter
+        for p in self._out:
+            p.expiry += delta_s
 
     @property
     def store(self):

@@ -384,3 +384,31 @@ def test_a_lifespan_longer_than_a_link_keeps_a_request_is_still_sent():
     pid = ta.send(w.now(), "buoy", Prng(7).bytes(100), 10 * 86400, 5)
     assert w.run(600000, until=lambda: DELIVERED in statuses(a, pid)), statuses(a, pid)
     assert [e[3] for e in packets(b)] == [Prng(7).bytes(100)]
+
+
+def test_a_wall_clock_step_forward_leaves_every_packet_the_time_it_had_left():
+    # the node's clock (acomm.wallclock) starts behind, as a board without a battery clock does,
+    # and a first fix steps it forward by a day: the packet queued before with 10 minutes to
+    # live still has them, and goes when its receiver comes into range
+    from acomm.wallclock import WallClock
+    from acomm_sim.channel import Channel
+    from acomm_sim.world import World
+
+    w = World(seed=3, channel=Channel(seed=3, loss_curve=((0.0, 0.0), (200.0, 0.0), (201.0, 1.0))))
+    a = w.add("diver", 2, "seatrac", position=(0, 0, 10), link_opts={"advert_period_ms": 600000})
+    b = w.add("buoy", 1, "seatrac", position=(5000, 0, 0), link_opts={"advert_period_ms": 600000})
+    base = [1000000]
+    wc = WallClock(lambda: base[0] + w.now() // 1000, w.clock)
+    a.node.wallclock = wc
+    ta = Transport.of(a.node, wall=wc.wall)
+    Transport.of(b.node, wall=lambda: w.now() // 1000)
+    pid = ta.send(w.now(), "buoy", b"position 43.1N 5.9E", 600, 5)
+    w.run(60000)
+    now = w.now()
+    before = wc.wall()
+    assert wc.fix(now, "iridium", 126230400 + 86400, 0, 500)  # 2024-01-02: years ahead of the port's clock
+    assert wc.wall() - before > 86400
+    w.run(120000)
+    assert EXPIRED not in statuses(a, pid)
+    w.channel.set_position(1, 150.0, 0.0, 0.0)
+    assert w.run(600000, until=lambda: DELIVERED in statuses(a, pid))
