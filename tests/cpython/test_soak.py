@@ -28,6 +28,8 @@ def test_short_soak_loses_nothing_and_every_fault_happened():
     # acknowledging by itself while its host's cable was out)
     assert f["commands_sent"] > 10 and f["commands_executed_twice"] == 0 and f["commands_lost"] == 0, f
     assert f["commands_without_status"] == 0, f
+    # a GPS glitch of an hour to a day is never taken by a clock that has had a good fix
+    assert f["clock_bad_fixes_offered"] > 0 and f["clock_bad_fixes_taken"] == 0, f
     assert sum(c.errors_raised for c in s.cables.values()) > 0  # unplugs that raised
     assert s.channel.noise_lost > 0
     assert sum(wc.jumps for wc in s.walls.values()) == f["faults_clock_jump"]

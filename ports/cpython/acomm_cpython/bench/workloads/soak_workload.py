@@ -13,7 +13,10 @@
 #                  store file, as a board's boot would
 #   store_fill     a burst of low-priority packets until the store refuses
 #                  one; the AUV's store is small (3 KiB) all the time
-#   clock_jump     the node's wall clock jumps -30..+30 min; ticks run on
+#   clock_jump     the node's port clock jumps -30..+30 min (ticks run on),
+#                  and its GPS gives one bad fix, 1 h..1 day off either way
+#                  (the node's wall clock, acomm.wallclock, takes neither:
+#                  a good fix from its GPS comes every 10 min)
 #   outage         the node goes out of acoustic range for 30..90 min: what
 #                  is on its way to it waits in the senders' and relays'
 #                  stores and comes an hour late
@@ -64,6 +67,7 @@ from acomm.catalog import teleop
 from acomm.errors import AcommError
 from acomm.events import DELIVERED, EV_PACKET, EV_PACKET_STATUS, EV_RECEIVED, EV_RELAY_STATUS, EV_STATUS, is_final
 from acomm.frame.auth import Auth
+from acomm.wallclock import WallClock as NodeClock
 from acomm.drivers.mac import MacDriver, Tdma
 from acomm.node import Node
 from acomm.prng import Prng
@@ -90,7 +94,9 @@ RATES = {"modem_reboot": 2, "unplug": 2, "noise": 2, "power_loss": 1, "store_fil
          "outage": 0.25, "restart_pair": 1}
 PACKETS_PER_HOUR = 12  # per node
 FAR = (5000.0, 0.0, 6.0)  # out of every other node's range
-KEY = bytes(range(101, 133))  # the soak's network key (32 bytes)
+KEY = bytes(range(101, 133))
+EPOCH_2020 = 1577836800  # the port's (Unix) seconds at 2020-01-01, where the clock's fixes count from
+GOOD_FIX_MS = 600000  # the soak's network key (32 bytes)
 COMMAND_PERIOD_MS = 180000
 COMMAND_LIFESPAN_S = 600
 
@@ -101,7 +107,7 @@ def _param(kind):
     if kind == "noise":
         return lambda r: (r.range(10, 600) * 1000, r.below(4))  # (ms, receiver index; 3: everywhere)
     if kind == "clock_jump":
-        return lambda r: r.range(-1800, 1800)
+        return lambda r: (r.range(-1800, 1800), r.range(3600, 86400) * (1 if r.chance(0.5) else -1))
     if kind == "outage":
         return lambda r: r.range(1800, 5400) * 1000
     return lambda r: 0
@@ -140,7 +146,7 @@ class Soak:
                                                       "seed": seed * 10 + ADDR[name]}, START[name])
             self.ends[name] = ends
             self.cables[name] = Cable(ends[1])
-            self.walls[name] = WallClock(w.clock)
+            self.walls[name] = WallClock(w.clock, base=1767225600)  # the port's clock, from 2026-01-01
             node = self._build(name)
             self.sn[name] = w.adopt(name, node, [ends], step=self._stepper(name))
         rates = dict((k, (v * rate_scale, _param(k))) for k, v in RATES.items())
@@ -155,12 +161,16 @@ class Soak:
         self.cmd_rids = {}  # (sender, request id) -> the entry above
         self.cmd_seq = 0
         self._next_command = w.now() + COMMAND_PERIOD_MS // 2
+        self._next_fix = w.now()
+        self.bad_fixes = [0, 0, 0, 0]  # offered, taken; the same to a clock with no fix since its boot
 
     # -- the nodes -----------------------------------------------------------
     def _build(self, name):
         # a node as its boot makes it: new objects, the store from its file
         w = self.w
-        node = Node(name, ADDR[name], w.clock, listener=self._listener(name))
+        # the node's wall clock on the port's, its last good time in a file beside the store
+        wc = NodeClock(self.walls[name], w.clock, os.path.join(self.dir, name + ".clock"), epoch_s=EPOCH_2020)
+        node = Node(name, ADDR[name], w.clock, listener=self._listener(name), wallclock=wc)
         for other in NAMES:
             node.names.add(other, ADDR[other])
         driver = MODEMS["seatrac"][0](ADDR[name], {})
@@ -172,9 +182,9 @@ class Soak:
                       sync=False)
         # learned routes (docs/routing.md): the nodes find their ways themselves, and a rebuilt
         # node starts with an empty route table, as a board's boot would
-        Transport.of(node, store=store, wall=self.walls[name], routing=self.routing)
+        Transport.of(node, store=store, wall=wc.wall, routing=self.routing)
         # the key, its counters reloaded from their file as at a boot
-        node.set_auth(Auth(KEY, path=os.path.join(self.dir, name + ".counters"), wall=self.walls[name]),
+        node.set_auth(Auth(KEY, path=os.path.join(self.dir, name + ".counters"), wall=wc.wall),
                       commands(), strict=True)
         return node
 
@@ -262,9 +272,18 @@ class Soak:
             p = START[name]
             self.channel.set_position(ADDR[name], p[0], p[1], p[2])
         elif kind == "clock_jump":
-            self.walls[name].jump(param)
+            self.walls[name].jump(param[0])
+            wc = self.sn[name].node.wallclock
+            fresh = wc.source == "none"  # no fix since its boot: the first is taken as it comes
+            self.bad_fixes[2 if fresh else 0] += 1
+            if wc.fix(now, "gps", self._true_s(now) + param[1], 0, 1000):
+                self.bad_fixes[3 if fresh else 1] += 1
         elif kind == "store_fill":
             self._fill(name, now)
+
+    def _true_s(self, now):
+        # the true time in seconds from 2020-01-01 (every port clock starts right)
+        return self.walls[NAMES[0]].base + now // 1000 - EPOCH_2020
 
     def _under_way(self, name):
         # (sender, receiver) of a command waiting for its acknowledgement or
@@ -324,6 +343,11 @@ class Soak:
         # the traffic task: one packet now, the next after an exponential gap
         if now >= self._traffic_until:
             return now + 3600000
+        if now >= self._next_fix:
+            # every node's GPS: the true time
+            self._next_fix = now + GOOD_FIX_MS
+            for name in NAMES:
+                self.sn[name].node.wallclock.fix(now, "gps", self._true_s(now), now % 1000, 1000)
         if now >= self._next_command:
             self._next_command = now + COMMAND_PERIOD_MS
             self._command(now)
@@ -381,6 +405,10 @@ class Soak:
                 for sn in self.sn.values() if sn.node.transport.router.routing is not None),
             "task_deaths": sum(self.deaths.values()),
             "packets_delivered_twice": c["duplicates"],
+            "clock_bad_fixes_offered": self.bad_fixes[0],
+            "clock_bad_fixes_taken": self.bad_fixes[1],
+            "clock_bad_first_fixes_offered": self.bad_fixes[2],
+            "clock_bad_first_fixes_taken": self.bad_fixes[3],
             "commands_sent": len(self.commands),
             "commands_executed_twice": sum(x[4] - 1 for x in self.commands.values() if x[4] > 1),
             "commands_lost": sum(1 for x in self.commands.values() if x[3] == DELIVERED and not x[4] and not x[5]),
