@@ -13,7 +13,7 @@
 #                  store file, as a board's boot would
 #   store_fill     a burst of low-priority packets until the store refuses
 #                  one; the AUV's store is small (3 KiB) all the time
-#   clock_jump     the node's port clock jumps -30..+30 min (ticks run on),
+#   clock_jump     the node's port clock jumps up to a day either way (ticks run on),
 #                  and its GPS gives one bad fix, 1 h..1 day off either way
 #                  (the node's wall clock, acomm.wallclock, takes neither:
 #                  a good fix from its GPS comes every 10 min)
@@ -107,7 +107,7 @@ def _param(kind):
     if kind == "noise":
         return lambda r: (r.range(10, 600) * 1000, r.below(4))  # (ms, receiver index; 3: everywhere)
     if kind == "clock_jump":
-        return lambda r: (r.range(-1800, 1800), r.range(3600, 86400) * (1 if r.chance(0.5) else -1))
+        return lambda r: (r.range(-86400, 86400), r.range(3600, 86400) * (1 if r.chance(0.5) else -1))
     if kind == "outage":
         return lambda r: r.range(1800, 5400) * 1000
     return lambda r: 0
