@@ -51,11 +51,8 @@ class WallClock:
     # changed (every name, here or there, is a slot of a board's heap)
     path = None
     epoch_s = 0
-    source = "none"  # or "host", "iridium", "gsm", "gps"
     _listeners = ()
     _cand = None  # a big step waiting for its confirmation: (s, ms, t, unc, source)
-    _unc = 0  # the last fix's uncertainty, at the anchor's ticks
-    _ms = 0
     saves = 0  # writes of the time file
 
     def __init__(self, wall=None, ticks=None, path=None, epoch_s=0, host=False):
@@ -71,8 +68,6 @@ class WallClock:
             self.path = path
         if epoch_s:
             self.epoch_s = epoch_s
-        if host:
-            self.source = "host"
         now = self.ticks()
         s = int(wall())
         if path is not None:
@@ -83,20 +78,26 @@ class WallClock:
                     s = saved
             except (OSError, ValueError):
                 pass  # none yet, or a write cut short: start as the port's clock says
+        # every field a fix sets is set here, in the build: a board's
+        # instance table that grew at the first fix was reallocated in the
+        # middle of a step (a hole in the heap when it is busiest)
+        self.source = "host" if host else "none"  # or "iridium", "gsm", "gps"
         self._s = s
+        self._ms = 0
         self._t = now
+        self._unc = 0  # the last fix's uncertainty, at the anchor's ticks
         self._last = s
         self._saved_t = now
 
     # -- reading --------------------------------------------------------------------
-    def wall(self):
+    def wall(self, now=None):
         """The wall clock's seconds now (an int, never less than a value returned before)."""
-        return self._read(self.ticks())
-
-    def _read(self, now):
-        # the anchor's time at now in whole seconds, held at the last value
-        # returned after a correction back; re-anchored before the ticks'
-        # difference could wrap
+        # the anchor's time at now (ticks) in whole seconds, held at the last
+        # value returned after a correction back; re-anchored before the
+        # ticks' difference could wrap. One method with what was _read(now):
+        # a method is a function object on a board's heap
+        if now is None:
+            now = self.ticks()
         d = ticks_diff(now, self._t) + self._ms
         s = self._s + d // 1000
         if d >= _REBASE_MS:
@@ -130,21 +131,22 @@ class WallClock:
         if self.source == "host" or not MIN_S <= secs <= _MAX_S:
             return False  # the host's clock is better; a date before 2024 is no time
         s = secs + self.epoch_s
+        c = self._cand
         if self.source != "none" and not _near(s, ms, now, self._s, self._ms, self._t,
                                                self.uncertainty_ms(now) + unc_ms + _TOL_MS):
             # a step beyond both uncertainties: only when confirmed
-            c = self._cand
             if c is None or not _near(s, ms, now, c[0], c[1], c[2], c[3] + unc_ms + _TOL_MS):
                 self._cand = (s, ms, now, unc_ms, source)
                 return False
             if c[4] == source and ticks_diff(now, c[2]) < _CONFIRM_MS:
                 return False  # the same source, too soon: the same glitch told twice
-        before = self._read(now)
+        before = self.wall(now)
         self._s = s
         self._ms = ms
         self._t = now
         self._unc = unc_ms
-        self._cand = None
+        if c is not None:
+            self._cand = None  # (written only when set: the class's None until a candidate)
         self.source = source
         self._moved(now, before, s)
         return True
@@ -152,7 +154,7 @@ class WallClock:
     def _moved(self, now, before, s):
         # the anchor moved: forward is a step for the listeners, back is held
         if s < before:
-            return  # held (_read)
+            return  # held (wall)
         self._last = s
         if s > before:
             for fn in self._listeners:
@@ -166,7 +168,7 @@ class WallClock:
         """The node's step: the port's clock read again (no source yet), the hourly save."""
         if self.source == "none" or self.source == "host":
             w = int(self._port())
-            before = self._read(now)
+            before = self.wall(now)
             if w >= before + _STEP_SAVE_S:
                 # the port's clock was set (or jumped) forward: follow it
                 self._s = w
@@ -174,23 +176,19 @@ class WallClock:
                 self._t = now
                 self._moved(now, before, w)
         if self.path is not None and ticks_diff(now, self._saved_t) >= _SAVE_MS:
-            self._save(now, self._read(now))
+            # the last good time, across a reboot (read back in __init__);
+            # here, not a method of its own (a board's heap)
+            self._saved_t = now
+            import os
 
-    # -- the last good time, across a reboot (read back in __init__) -------------------
-    def _save(self, now, s):
-        self._saved_t = now
-        if self.path is None:
-            return
-        import os
-
-        tmp = self.path + ".new"
-        try:
-            with open(tmp, "w") as f:
-                f.write("%d\n" % s)
-            os.rename(tmp, self.path)
-            self.saves += 1
-        except OSError:
-            pass  # a full or failing flash: the clock goes on, saved again in an hour
+            tmp = self.path + ".new"
+            try:
+                with open(tmp, "w") as f:
+                    f.write("%d\n" % self.wall(now))
+                os.rename(tmp, self.path)
+                self.saves += 1
+            except OSError:
+                pass  # a full or failing flash: the clock goes on, saved again in an hour
 
 
 def _near(s, ms, now, s0, ms0, t0, tol_ms):
