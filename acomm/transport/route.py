@@ -119,7 +119,9 @@ class Router:
             reach = self._reach(link, hop)
             if reach is None:
                 continue
-            c = link.caps
+            # the driver's own figures: Link.caps copies them (a Capabilities and its table grown
+            # six times on a board's heap, per link and choice) to change only the MTUs and flags
+            c = link.driver.caps
             ms = c.latency_ms + (size * 8000 // c.bitrate if c.bitrate else 1 << 30)
             money = size * c.cost_tx
             if priority <= self.urgent:
