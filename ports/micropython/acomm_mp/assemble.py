@@ -26,6 +26,22 @@ from .runloop import Board
 
 
 def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None, say=print, make_report=None):
+    import gc
+
+    # the UARTs and the drivers first: their buffers (a receive ring of
+    # 1152 B at 115200 baud, an AT driver's line and block) each need one
+    # free run of the heap, which the build's smaller objects would break
+    # up; and a collection after each part of the build, so its garbage is
+    # reused before the next part's objects land beyond it (a board's heap
+    # is then less fragmented when the node starts)
+    uarts = [open_uart(lk) for lk in cfg["links"]]
+    drvs = []
+    for i, lk in enumerate(cfg["links"]):
+        try:
+            cls = driver_class(lk["modem"])
+            drvs.append(cls(lk["address"], **lk["options"]) if modem(lk["modem"])[4] else cls(**lk["options"]))
+        except TypeError as e:
+            raise ConfigError("board config: links[%d].options: %s" % (i, e))
     st = cfg["storage"]
     wc = None
     if wall is not None:
@@ -35,9 +51,11 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         # battery clock never starts again earlier than it
         wc = WallClock(wall, clock, st["path"] + ".clock" if st is not None and open_store is not None else None)
         wall = wc.wall
+        gc.collect()
     node = Node(cfg["name"], cfg["node_id"], clock, listener=listener, wallclock=wc)
     for name in cfg["peers"]:
         node.names.add(name, cfg["peers"][name])
+    gc.collect()
     a = cfg.get("auth")
     if a is not None:
         from acomm.apps.policy import commands
@@ -46,15 +64,12 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         # the counters beside the store, so they survive a restart with it
         path = st["path"] + ".auth" if st is not None and open_store is not None else None
         node.set_auth(Auth(a["key"], a["tag_len"], path, a["reserve"], wall), commands())
+        gc.collect()
     for i, lk in enumerate(cfg["links"]):
-        try:
-            cls = driver_class(lk["modem"])
-            drv = cls(lk["address"], **lk["options"]) if modem(lk["modem"])[4] else cls(**lk["options"])
-        except TypeError as e:
-            raise ConfigError("board config: links[%d].options: %s" % (i, e))
         opts = dict(lk["link"])
         opts["medium"] = lk["medium"]
-        node.add_link(lk["name"], drv, open_uart(lk), **opts)
+        node.add_link(lk["name"], drvs[i], uarts[i], **opts)
+        gc.collect()
     g = cfg.get("gps")
     if g is not None:
         # imported only here: a board without a GPS never loads the reader
@@ -63,9 +78,11 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         node.add_time_source(GpsReader(), open_uart(g))
     # no store: the transport keeps its packets in RAM (a MemoryStore)
     store = open_store(st) if st is not None and open_store is not None else None
+    gc.collect()
     # routing: None (absent) loads nothing of the route finder; True or a dict: learned routes
     transport = Transport.of(node, store=store, routes=cfg["routes"], wall=wall, max_packet=cfg["max_packet"],
                              routing=cfg.get("routing"))
+    gc.collect()
     station = None
     sc = cfg["station"]
     if sc is not None:
