@@ -9,7 +9,8 @@
 #                     returns the short count instead, as FAT does)
 #   fs.refuse = 30    every open for writing raises OSError(30) (EROFS; 13
 #                     EACCES), as a read-only mount or a file without write
-#                     permission does; reading still works
+#                     permission does, and with EROFS so does every write to
+#                     a file already open; reading still works
 #   fs.fail = 5       the next write raises OSError(5) (EIO), once
 #   fs.writes, fs.bytes   write() calls that wrote, and the bytes they wrote
 
@@ -48,6 +49,10 @@ class FaultFile:
         if fs.fail is not None:
             e, fs.fail = fs.fail, None
             raise OSError(e)
+        if fs.refuse == EROFS:
+            # a file system remounted read-only refuses the writes of files
+            # already open too (a file without write permission does not)
+            raise OSError(EROFS)
         n = len(b)
         if fs.free is not None and n > fs.free:
             n = fs.free  # what fits goes in first, as on a real disk

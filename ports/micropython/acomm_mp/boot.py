@@ -17,6 +17,7 @@ import os
 
 from acomm.compat import ticks_ms
 from acomm.transport.store import Store
+from acomm.errors import StoreError
 
 from . import release, release_builder
 from .uartstream import UartStream
@@ -58,7 +59,7 @@ def open_store(st, say=print):
     try:
         _makedirs(st["path"])
         return Store(st["path"], capacity_bytes=st["capacity"], max_record=st["max_record"])
-    except OSError as e:
+    except (OSError, StoreError) as e:  # the store says which path and why (StoreFull: no room to make it)
         # A flash that cannot hold the store (full before the store was
         # ever made, or failing) must not stop the board at boot: main.py
         # would end at the REPL with no node and no watchdog, at every

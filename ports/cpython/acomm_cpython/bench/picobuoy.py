@@ -387,7 +387,7 @@ def store_records(path):
         if end + 4 > len(data) or zlib.crc32(data[p:end]) != int.from_bytes(data[end:end + 4], "little"):
             p += 1
             continue
-        if key >= 0xFFFFFE:
+        if (key >> 16) & 0xFF == 0xFF:  # origin 255 is no node's: the packet ids' limit, the packets done
             out.append((kind, "meta", key))
         else:
             out.append((kind, (key >> 16) & 0xFF, key & 0xFFFF, key >> 24))
