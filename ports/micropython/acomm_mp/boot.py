@@ -17,7 +17,6 @@ import os
 
 from acomm.compat import ticks_ms
 from acomm.transport.store import Store
-from acomm.errors import StoreError
 
 from . import release, release_builder
 from .uartstream import UartStream
@@ -50,16 +49,18 @@ def _makedirs(path):
             os.mkdir(at)
         except OSError as e:
             try:
-                os.stat(at)  # already there
+                mode = os.stat(at)[0]  # already there
             except OSError:
                 raise e  # not made: its own error (a full flash) says why
+            if not mode & 0x4000:
+                raise e  # a file where the folder goes: the store cannot be made
 
 
 def open_store(st, say=print):
     try:
         _makedirs(st["path"])
         return Store(st["path"], capacity_bytes=st["capacity"], max_record=st["max_record"])
-    except (OSError, StoreError) as e:  # the store says which path and why (StoreFull: no room to make it)
+    except OSError as e:
         # A flash that cannot hold the store (full before the store was
         # ever made, or failing) must not stop the board at boot: main.py
         # would end at the REPL with no node and no watchdog, at every
