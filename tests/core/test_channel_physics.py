@@ -96,10 +96,13 @@ def test_link_pdr_falls_with_range_wind_and_echoes():
     assert 1000 < r < 100000
     assert lb.link_pdr(site, "seatrac_x150", r * 0.8) > 0.9 > lb.link_pdr(site, "seatrac_x150", r * 1.2)
     assert lb.range_at(site.with_(wind_mps=15), "seatrac_x150") < r
-    # a reflective shallow channel costs the one-symbol BPSK modem, not the hopping FSK one
-    river = Site(depth_m=1.75, node_depth_m=1.0, bottom_loss_db=0.5, surface_loss_db=0.5, max_bounces=40)
+    # a reflective shallow channel costs the one-symbol BPSK modem, not the
+    # hopping FSK one (its late echoes, without fading; test_fading has both)
+    river = Site(depth_m=1.75, node_depth_m=1.0, bottom_loss_db=0.5, surface_loss_db=0.5, max_bounces=40,
+                 fading="none")
     assert lb.link_pdr(river, "bpsk", 85, 14) < 0.1
     assert lb.link_pdr(river, "fhss", 85, 14) > 0.9
+    assert lb.link_pdr(river.with_(fading="rician"), "fhss", 85, 14) > 0.9
 
 
 def test_capture_near_packet_survives_far_one():

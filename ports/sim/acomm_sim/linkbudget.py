@@ -5,8 +5,9 @@
 
 from . import acoustics as ac
 from . import detection as det
+from . import fading
 from .modems_db import model
-from .multipath import late_echo_ratio
+from .multipath import echo_ratios
 
 
 def absorption(site, f_khz):
@@ -29,19 +30,21 @@ def noise_power(site, m):
     return ac.lin(ac.noise_band_db(lo, hi, site.wind_mps, site.shipping))
 
 
-def received(site, ms, mr, metres, zs, zr, alpha=None, tl=None):
-    """(power uPa^2, late echo ratio) of a packet from a modem of model ms at
-    depth zs to one of model mr at depth zr, metres apart (straight line):
-    the source level less spreading and absorption at the sender's centre
-    frequency (or less tl(metres, zs, zr, f_khz) dB when a transmission loss
-    model is given: Bellhop's), less the receiver's implementation loss
-    (impl_loss_db, 0 unless set), times the share of the sender's band the
-    receiver listens to (0 when the bands do not meet); the late echoes as
-    multipath says."""
+def arrival(site, ms, mr, metres, zs, zr, alpha=None, tl=None):
+    """(power uPa^2, late echo ratio, near echo ratio) of a packet from a
+    modem of model ms at depth zs to one of model mr at depth zr, metres
+    apart (straight line): the source level less spreading and absorption
+    at the sender's centre frequency (or less tl(metres, zs, zr, f_khz) dB
+    when a transmission loss model is given: Bellhop's), less the
+    receiver's implementation loss (impl_loss_db, 0 unless set), times the
+    share of the sender's band the receiver listens to (0 when the bands do
+    not meet); the echoes as multipath.echo_ratios says (late: inter-symbol
+    interference; near: within the receiver's tolerance, what it fades
+    with)."""
     lo = max(ms["band_khz"][0], mr["band_khz"][0])
     hi = min(ms["band_khz"][1], mr["band_khz"][1])
     if hi <= lo:
-        return 0.0, 0.0
+        return 0.0, 0.0, 0.0
     share = (hi - lo) / (ms["band_khz"][1] - ms["band_khz"][0])
     fc = centre_khz(ms)
     if alpha is None:
@@ -50,7 +53,13 @@ def received(site, ms, mr, metres, zs, zr, alpha=None, tl=None):
     power = ac.lin(ms["sl_db"] - loss - mr.get("impl_loss_db", 0.0)) * share
     dz = zr - zs
     h = (metres * metres - dz * dz) ** 0.5 if metres * metres > dz * dz else 0.0
-    late = late_echo_ratio(h, zs, zr, site, alpha, mr["tolerance_ms"])[0]
+    late, near, _ = echo_ratios(h, zs, zr, site, alpha, mr["tolerance_ms"])
+    return power, late, near
+
+
+def received(site, ms, mr, metres, zs, zr, alpha=None, tl=None):
+    """(power uPa^2, late echo ratio): arrival() without the near echoes."""
+    power, late, _ = arrival(site, ms, mr, metres, zs, zr, alpha, tl)
     return power, late
 
 
@@ -76,17 +85,40 @@ def chances(m, power, noise, inter_pre=0.0, inter=0.0, frac=0.0, nbits=None, thr
     return pd, ok, ber_clean * (1 - frac) + ber_hit * frac
 
 
+_THR = {}  # false alarm probability -> detector threshold
+
+
+def threshold(pfa):
+    """det.q_inv(pfa), kept (a bisection: worth keeping)."""
+    t = _THR.get(pfa)
+    if t is None:
+        t = _THR[pfa] = det.q_inv(pfa)
+    return t
+
+
 def link_pdr(site, name, metres, nbytes=None, zs=None, zr=None):
     """Chance that a packet of nbytes (default: the model's) sent over
     `metres` between two modems of model `name` at depths zs, zr (default:
-    the site's node depth) arrives whole, with no other traffic."""
+    the site's node depth) arrives whole, with no other traffic: averaged
+    over the site's fading (acomm_sim.fading: the mean power of the direct
+    path and its unresolved echoes times the gain g; the late echoes at
+    their mean)."""
     m = model(name)
     zs = site.node_depth_m if zs is None else zs
     zr = site.node_depth_m if zr is None else zr
-    power, late = received(site, m, m, metres, zs, zr)
-    nbits = None if nbytes is None else (nbytes + m["overhead_bytes"]) * 8
-    pd, ok, _ = chances(m, power, noise_power(site, m) + power * late, nbits=nbits)
-    return pd * ok
+    power, late, near = arrival(site, m, m, metres, zs, zr)
+    nbits = (m["default_bytes"] if nbytes is None else nbytes) * 8 + m["overhead_bytes"] * 8
+    noise = noise_power(site, m) + power * late
+    thr = threshold(m["pfa"])
+
+    k, scale = fading.params(site.fading, near)
+    mean = power * scale
+
+    def ok(g):
+        pd, whole, _ = chances(m, mean * g, noise, nbits=nbits, thr=thr)
+        return pd * whole
+
+    return fading.average(ok, k)
 
 
 def range_at(site, name, pdr=0.9, nbytes=None, lo=1.0, hi=100000.0):
@@ -96,7 +128,7 @@ def range_at(site, name, pdr=0.9, nbytes=None, lo=1.0, hi=100000.0):
         return lo
     if link_pdr(site, name, hi, nbytes) >= pdr:
         return hi
-    for _ in range(60):
+    for _ in range(40):
         mid = (lo + hi) / 2
         if link_pdr(site, name, mid, nbytes) >= pdr:
             lo = mid

@@ -3,7 +3,8 @@
 # speed), each weaker than the direct path by its longer way (spreading and
 # absorption) and by what each reflection loses. Echoes that arrive within
 # the receiving modem's tolerance (its guard or symbol or equaliser span)
-# are absorbed; later ones are interference, as power added to the noise.
+# are absorbed (they make the direct path fade: acomm_sim.fading); later
+# ones are interference, as power added to the noise.
 # Not a ray tracer (no refraction, no rough-surface scatter): a documented
 # first order model (docs/simulator.md, "Multipath"). Portable Python.
 
@@ -37,16 +38,20 @@ def images(horizontal_m, zs, zr, depth, max_bounces):
         m += 1
 
 
-def late_echo_ratio(horizontal_m, zs, zr, site, alpha_db_per_km, tolerance_ms):
-    """Power of the echoes that arrive more than tolerance_ms after the
-    direct path, over the direct path's (linear), in the site's channel;
-    also the delay spread (ms) of all the echoes. -> (ratio, spread_ms)."""
+def echo_ratios(horizontal_m, zs, zr, site, alpha_db_per_km, tolerance_ms):
+    """The echoes of the site's channel against the direct path, for a
+    receiver that absorbs tolerance_ms of delay spread -> (late, near,
+    spread_ms): the power of the echoes later than tolerance_ms over the
+    direct path's (linear; inter-symbol interference), the same for those
+    within it (what the direct path fades with: acomm_sim.fading's K is
+    1 / near), and the delay spread of all of them."""
     paths = images(horizontal_m, zs, zr, site.depth_m, site.max_bounces)
     h2 = horizontal_m * horizontal_m
     r0 = math.sqrt(h2 + paths[0][0] ** 2)
     r0 = r0 if r0 > 1.0 else 1.0
     k10 = site.spreading_k * 10
     late = 0.0
+    near = 0.0
     spread = 0.0
     c = site.sound_speed
     for z, ns, nb in paths[1:]:
@@ -54,9 +59,18 @@ def late_echo_ratio(horizontal_m, zs, zr, site, alpha_db_per_km, tolerance_ms):
         delay_ms = (r - r0) / c * 1000
         if delay_ms > spread:
             spread = delay_ms
-        if delay_ms <= tolerance_ms:
-            continue
         loss_db = k10 * math.log10(r / r0) + alpha_db_per_km * (r - r0) / 1000 \
             + ns * site.surface_loss_db + nb * site.bottom_loss_db
-        late += 10 ** (-loss_db / 10)
+        if delay_ms <= tolerance_ms:
+            near += 10 ** (-loss_db / 10)
+        else:
+            late += 10 ** (-loss_db / 10)
+    return late, near, spread
+
+
+def late_echo_ratio(horizontal_m, zs, zr, site, alpha_db_per_km, tolerance_ms):
+    """Power of the echoes that arrive more than tolerance_ms after the
+    direct path, over the direct path's (linear), in the site's channel;
+    also the delay spread (ms) of all the echoes. -> (ratio, spread_ms)."""
+    late, _, spread = echo_ratios(horizontal_m, zs, zr, site, alpha_db_per_km, tolerance_ms)
     return late, spread

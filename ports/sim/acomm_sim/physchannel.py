@@ -8,6 +8,9 @@
 # acomm_sim.detection gives the chance the preamble is detected and the bit
 # error rate; a modem that checks a CRC drops a frame with errors, one that
 # hands up bytes gets them damaged (the link's FEC repairs what it can).
+# Each copy fades (acomm_sim.fading): one Rician draw per copy, with the K
+# factor of its pair's geometry, scales its power, as signal at its
+# receiver and as interference at the others it overlaps.
 #
 # Everything else (motion, half-duplex, noise bursts, counters, the Medium
 # interface) is Channel's. Nothing here changes Channel: the curve model
@@ -20,6 +23,7 @@ from acomm.compat import ticks_add, ticks_diff
 
 from . import acoustics as ac
 from . import detection as det
+from . import fading
 from . import linkbudget as lb
 from .channel import Channel
 from .modems_db import model, model_of_station
@@ -45,10 +49,10 @@ class PhysicsChannel(Channel):
         self.move_m = move_m
         self.tl = tl
         self._model = dict(modems or {})  # addr -> model name
-        self._pair = {}  # (src, dst) -> (src place, dst place, received power, late echo ratio)
+        self._pair = {}  # (src, dst) -> (src place, dst place, power, late echo ratio, {nbits: chances}, K, scale)
         self._noise = {}  # model name -> noise power in its band (uPa^2)
         self._alpha = {}  # centre frequency -> absorption dB/km
-        self._rx = {}  # flight seq -> (received power, late echo ratio)
+        self._rx = {}  # flight seq -> (signal power, its late echoes' power, {nbits: chances} or None when it fades)
         self._done = {}  # dst -> [(start, end, power)] arrivals that ended, as interferers
         self._longest = 1  # the longest airtime seen (ms)
         self._thr = {}  # false alarm probability -> detector threshold (detection.q_inv)
@@ -86,25 +90,29 @@ class PhysicsChannel(Channel):
         return n
 
     def budget(self, src, dst, metres=None):
-        """(received power uPa^2, late echo ratio, {nbits: chances without
-        interference}) of src's packets at dst (linkbudget.received), kept per pair until either end moves move_m
-        (metres: the distance, when known; else worked out)."""
+        """(received power uPa^2 of the direct path, late echo ratio,
+        {nbits: chances without interference or fading}, Rician K or None
+        for no fading, mean power of the faded sum over the direct path's)
+        of src's packets at dst (linkbudget.arrival, fading.params), kept
+        per pair until either end moves move_m (metres: the distance, when
+        known; else worked out)."""
         ps = self.position(src)
         pd = self.position(dst)
         key = (src, dst)
         kept = self._pair.get(key)
         if kept is not None and _near(kept[0], ps, self.move_m) and _near(kept[1], pd, self.move_m):
-            return kept[2], kept[3], kept[4]
+            return kept[2], kept[3], kept[4], kept[5], kept[6]
         d = self.distance(src, dst) if metres is None else metres
         ms = model(self.model_name(src))
         zs = ps[2] if ps is not None else self.site.node_depth_m
         zr = pd[2] if pd is not None else self.site.node_depth_m
-        power, late = lb.received(self.site, ms, model(self.model_name(dst)), d, zs, zr,
-                                  self.absorption(lb.centre_khz(ms)), self.tl)
-        # the last: nbits -> the chances of a copy no other overlaps (they
-        # depend on the geometry only, and most copies are such)
-        kept = self._pair[key] = (ps, pd, power, late, {})
-        return power, late, kept[4]
+        power, late, near = lb.arrival(self.site, ms, model(self.model_name(dst)), d, zs, zr,
+                                       self.absorption(lb.centre_khz(ms)), self.tl)
+        # nbits -> the chances of a copy no other overlaps and that does not
+        # fade (they depend on the geometry only); K of the pair's fading
+        k, scale = fading.params(self.site.fading, near)
+        kept = self._pair[key] = (ps, pd, power, late, {}, k, scale)
+        return power, late, kept[4], k, scale
 
     def snr_db(self, src, dst):
         """The SNR (dB, in dst's band, no interference, no echoes) of src's packets at dst."""
@@ -129,12 +137,17 @@ class PhysicsChannel(Channel):
 
     # -- the Medium hooks ------------------------------------------------------------------
     def _fly(self, now, end, src, dst, packet, d):
-        power, late, clean = self.budget(src, dst, d)
+        power, late, clean, k, scale = self.budget(src, dst, d)
         if power <= 0 or ac.db(power / self.noise_power(self.model_name(dst))) < _WEAK_DB:
             self.range_lost += 1  # lost in the noise, and too weak to disturb anything
             return
         Channel._fly(self, now, end, src, dst, packet, d)
-        self._rx[self._seq] = (power, late, clean)
+        if k is None:
+            self._rx[self._seq] = (power, power * late, clean)
+        else:
+            # this copy's fade: its power as signal here and as interference
+            # to the others it overlaps; its late echoes keep their mean
+            self._rx[self._seq] = (power * scale * fading.gain(self.rng, k), power * late, None)
 
     def cancel(self, src, now):
         Channel.cancel(self, src, now)
@@ -147,7 +160,7 @@ class PhysicsChannel(Channel):
 
     def _lost_on_arrival(self, item):
         end, seq, dst, src, packet, start, _ = item
-        power, late, clean = self._rx.pop(seq, (0.0, 0.0, {}))
+        power, isi, clean = self._rx.pop(seq, (0.0, 0.0, None))
         done = self._done.get(dst)
         if done is None:
             done = self._done[dst] = []
@@ -187,7 +200,7 @@ class PhysicsChannel(Channel):
             inter += p * f
             if _overlap(start, pre_end, s, e) > 0:
                 inter_pre += p
-        noise = self.noise_power(name) + power * late
+        noise = self.noise_power(name) + isi
         thr = self._thr.get(m["pfa"])
         if thr is None:
             thr = self._thr[m["pfa"]] = det.q_inv(m["pfa"])
@@ -195,7 +208,7 @@ class PhysicsChannel(Channel):
             nbits = (len(packet) + m["overhead_bytes"]) * 8
         else:
             nbits = (m["default_bytes"] + m["overhead_bytes"]) * 8
-        if inter_pre or frac:
+        if inter_pre or frac or clean is None:
             pd, ok, ber = lb.chances(m, power, noise, inter_pre, inter, frac, nbits, thr)
         else:
             c = clean.get(nbits)

@@ -7,6 +7,8 @@
 
 import json
 
+from .fading import check_mode
+
 # name -> default; docs/simulator.md says what each means
 DEFAULTS = {
     "depth_m": 100.0,  # water depth (isovelocity channel for multipath)
@@ -22,6 +24,7 @@ DEFAULTS = {
     "bottom_loss_db": 6.0,  # lost per bottom reflection
     "max_bounces": 6,  # image arrivals up to this many reflections
     "node_depth_m": 10.0,  # depth of a node given no position
+    "fading": "rician",  # per arrival: "rician" (K from the echoes), "rayleigh" or "none" (acomm_sim.fading)
 }
 
 # Named sites (Site.preset): the conditions the channel bench states its
@@ -53,6 +56,7 @@ class Site:
             setattr(self, k, v if isinstance(DEFAULTS[k], str) else float(v))
         if self.absorption not in ("thorp", "fg"):
             raise ValueError("absorption is 'thorp' or 'fg', not %r" % (self.absorption,))
+        check_mode(self.fading)
         if self.depth_m <= 0:
             raise ValueError("depth_m must be positive")
         self.max_bounces = int(self.max_bounces)
