@@ -21,8 +21,13 @@
 #   range_m        range the datasheet states (None: none stated)
 #   impl_loss_db   optional: how far the real receiver falls short of this
 #                  ideal one (dB taken off every arrival's power); none of
-#                  the models here sets it (channel_margin_to_datasheet_*
-#                  in `acomm bench channel` says what would match the datasheet)
+#                  the models here sets it: no measured SNR threshold or
+#                  receiver loss of these modems, independent of their
+#                  stated ranges, was found (searched 2026-11-28; docs/
+#                  simulator.md, "Measured"), and fitting it to those ranges
+#                  would fit it to what it is compared with
+#                  (channel_margin_to_datasheet_* in `acomm bench channel`
+#                  says what would match the datasheet)
 #   src            {field: source}
 
 _SEATRAC = "Blueprint Subsea SeaTrac X150 datasheet and product page (blueprintsubsea.com/seatrac)"

@@ -9,14 +9,24 @@
 #   channel_noise_db_<f>kHz_wind<w>            ambient noise PSD (dB re 1 uPa^2/Hz)
 #   channel_range_pdr90_<modem>_m              range at which a packet of the
 #        model's default size arrives whole 9 times in 10, in the "datasheet"
-#        site (Site.preset), beside channel_range_datasheet_<modem>_m where
-#        the datasheet states one, and channel_margin_to_datasheet_<modem>_db:
-#        the extra loss that would bring the two together
+#        site (Site.preset), averaged over its fading (acomm_sim.fading),
+#        beside channel_range_datasheet_<modem>_m where the datasheet states
+#        one, and channel_margin_to_datasheet_<modem>_db: the extra loss that
+#        would bring the two together
+#   channel_range_pdr50_<modem>_m              the same where it falls to 0.5
+#        (with pdr90: how wide the slope is)
+#   channel_nofading_range_pdr90_<modem>_m     pdr90 with Site(fading="none"):
+#        the model before fading (a cliff: its pdr50 is a few % further)
+#   channel_fading_k_<modem>                   the Rician K at the pdr90 range
 #   channel_sim_pdr_at_range90_seatrac_x150    the same link on the simulated
-#        channel (packets drawn one by one): about 0.9
+#        channel (packets and fades drawn one by one): about 0.9; and
+#        channel_sim_pdr_at_range50_seatrac_x150: about 0.5
 #   channel_seed004_<place>_<profile>_pdr      seed 004's trial geometry on
 #        the "piovego" site (river, 85 m) and in the lab (0.6 m), 14-byte
-#        commands, beside the seed's two trials (..._seed004_t1/t2)
+#        commands, beside the seed's two trials (..._seed004_t1/t2);
+#        channel_seed004_<place>_<profile>_link_pdr the link budget's
+#        average for the same (no draws); channel_seed004_nofading_<...>_pdr
+#        the simulated trial with Site(fading="none")
 #   channel_capture_near_pdr_<physics|curve>   a sender 100 m from the
 #        receiver under an interferer 2 km away whose packet overlaps it;
 #        channel_capture_far_pdr_<...> the interferer's own
@@ -28,6 +38,7 @@ import time
 from acomm.drivers.mac import Tdma
 from acomm.events import EV_RECEIVED
 from acomm_sim import acoustics as ac
+from acomm_sim import fading
 from acomm_sim import linkbudget as lb
 from acomm_sim.channel import Channel
 from acomm_sim.linktrial import capture_trial, link_trial
@@ -66,30 +77,40 @@ def _absorption(emit):
 
 def _ranges(emit, quick):
     site = Site.preset("datasheet")
+    flat = Site.preset("datasheet", fading="none")
     for name in sorted(MODELS):
         m = MODELS[name]
         r = lb.range_at(site, name)
         emit("channel_range_pdr90_%s_m" % name, r, "m")
+        emit("channel_range_pdr50_%s_m" % name, lb.range_at(site, name, 0.5), "m")
+        emit("channel_nofading_range_pdr90_%s_m" % name, lb.range_at(flat, name), "m")
+        near = lb.arrival(site, m, m, r, site.node_depth_m, site.node_depth_m)[2]
+        k = fading.params(site.fading, near)[0]
+        emit("channel_fading_k_%s" % name, -1.0 if k is None else k, "ratio")
         if m["range_m"]:
             emit("channel_range_datasheet_%s_m" % name, m["range_m"], "m")
             alpha = lb.absorption(site, lb.centre_khz(m))
             emit("channel_margin_to_datasheet_%s_db" % name, ac.transmission_loss_db(r, alpha, site.spreading_k)
                  - ac.transmission_loss_db(m["range_m"], alpha, site.spreading_k), "dB")
-    r = lb.range_at(site, "seatrac_x150")
-    ch = PhysicsChannel(site, modems={1: "seatrac_x150", 2: "seatrac_x150"}, seed=1)
     n = 50 if quick else 400
-    emit("channel_sim_pdr_at_range90_seatrac_x150",
-         link_trial(ch, r, n, b"x" * MODELS["seatrac_x150"]["default_bytes"], (10.0, 10.0)), "ratio")
+    for p in (90, 50):
+        r = lb.range_at(site, "seatrac_x150", p / 100)
+        ch = PhysicsChannel(site, modems={1: "seatrac_x150", 2: "seatrac_x150"}, seed=1)
+        emit("channel_sim_pdr_at_range%d_seatrac_x150" % p,
+             link_trial(ch, r, n, b"x" * MODELS["seatrac_x150"]["default_bytes"], (10.0, 10.0)), "ratio")
 
 
 def _seed004(emit, quick):
     n = 40 if quick else 500
     for (place, profile), trials in sorted(SEED004.items()):
         site = Site.preset("piovego")
-        ch = PhysicsChannel(site, modems={1: profile, 2: profile}, seed=4)
         air = ((len(COMMAND) + MODELS[profile]["overhead_bytes"]) * 8000) // int(MODELS[profile]["bitrate"])
-        pdr = link_trial(ch, PLACES[place], n, COMMAND, (1.0, 1.0), air)
-        emit("channel_seed004_%s_%s_pdr" % (place, profile), 100 * pdr, "%")
+        for tag, s in (("", site), ("nofading_", site.with_(fading="none"))):
+            ch = PhysicsChannel(s, modems={1: profile, 2: profile}, seed=4)
+            pdr = link_trial(ch, PLACES[place], n, COMMAND, (1.0, 1.0), air)
+            emit("channel_seed004_%s%s_%s_pdr" % (tag, place, profile), 100 * pdr, "%")
+        emit("channel_seed004_%s_%s_link_pdr" % (place, profile),
+             100 * lb.link_pdr(site, profile, PLACES[place], len(COMMAND), 1.0, 1.0), "%")
         for i, t in enumerate(trials):
             emit("channel_seed004_%s_%s_seed004_t%d_pdr" % (place, profile, i + 1), t, "%")
 
