@@ -33,8 +33,9 @@ DEFAULTS = {
 # "piovego": seed 004's river trial (Piovego canal, Padova): 1.5-2 m deep
 # (1.75 taken), transducers at about 1 m, fresh water; its temperature,
 # wind and shipping are assumed, and its bottom loss per reflection is the
-# one free figure, fitted so that the BPSK profile's PDR at 85 m is the
-# mean of the seed's two trials (92.7 %; docs/simulator.md).
+# one free figure, fitted (before fading, with fading "none") so that the
+# BPSK profile's PDR at 85 m is the mean of the seed's two trials (92.7 %;
+# docs/simulator.md); it was not fitted again for fading.
 PRESETS = {
     "datasheet": {"depth_m": 1000.0, "wind_mps": 5.0, "shipping": 0.5, "node_depth_m": 10.0},
     "piovego": {"depth_m": 1.75, "temperature_c": 15.0, "salinity_psu": 0.3, "ph": 7.5, "absorption": "fg",
