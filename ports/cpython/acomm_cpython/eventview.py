@@ -171,6 +171,28 @@ class PacketStatus(_Outcome):
         return int(self.raw[E.PID])
 
 
+class RelayStatus(_Outcome):
+    """A packet this node took custody of as a relay, ended here undelivered (expired or failed).
+    Its origin heard `transmitted` when custody moved and hears nothing more: this is the one
+    place that loss is told."""
+
+    __slots__ = ()
+    kind = "relay_status"
+    _fields = ("origin", "packet_id", "status_name", "reason", "final")
+    # (EV_RELAY_STATUS, origin_name, pid, status, reason): acomm/events.py names no indices for
+    # it (a name there is a dict slot on every board's heap)
+    _STATUS = 3
+    _REASON = 4
+
+    @property
+    def origin(self) -> str:
+        return str(self.raw[1])
+
+    @property
+    def packet_id(self) -> int:
+        return int(self.raw[2])
+
+
 class Packet(Event):
     """A whole transport packet that arrived for this node."""
 
@@ -225,6 +247,7 @@ _VIEWS: Dict[int, "type[Event]"] = {
     E.EV_CAPS: Caps,
     E.EV_RANGE_RECEIVED: Ranges,
     E.EV_PACKET_STATUS: PacketStatus,
+    E.EV_RELAY_STATUS: RelayStatus,
     E.EV_PACKET: Packet,
     E.EV_REFUSED: Refused,
 }

@@ -13,7 +13,7 @@ import time
 
 import acomm.events as E
 from acomm.events import (AVAIL_NAMES, EV_AVAILABILITY, EV_PACKET, EV_PACKET_STATUS, EV_RANGE_RECEIVED, EV_RECEIVED,
-                          EV_REFUSED, EV_STATUS, STATUS_NAMES, is_final)
+                          EV_REFUSED, EV_RELAY_STATUS, EV_STATUS, STATUS_NAMES, is_final)
 
 
 def _name(i, names):
@@ -71,6 +71,10 @@ def as_dict(ev):
         if caddy:
             d["caddy"] = caddy
         return d
+    if code == EV_RELAY_STATUS:
+        # (EV_RELAY_STATUS, origin, pid, status, reason): a packet in this relay's custody ended here
+        return {"event": "relay_status", "origin": ev[1], "id": ev[2], "status": _name(ev[3], STATUS_NAMES),
+                "reason": ev[4] or "", "final": True}
     if code == EV_REFUSED:
         link = ev[E.LINK]
         return {"event": "refused", "link": link.name if link is not None else None, "src": ev[E.REFUSED_SRC],
@@ -102,6 +106,8 @@ def as_text(d):
         if not d["final"]:
             return None
         return "packet %d %s%s" % (d["id"], d["status"], _reason(d))
+    if e == "relay_status":
+        return "relayed packet %d from %s %s here%s" % (d["id"], d["origin"], d["status"], _reason(d))
     if e == "packet_received":
         caddy = "".join("; CADDY %s %s" % (m[0], json.dumps(m[1], sort_keys=True)) for m in d.get("caddy", ()))
         return "received packet %s -> %s: %d bytes%s%s" % (d["src"], d["dst"], d["bytes"], caddy,
