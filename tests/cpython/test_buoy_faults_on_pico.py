@@ -541,3 +541,19 @@ def test_open_store_on_a_flash_that_cannot_hold_it_gives_a_store_that_takes_noth
                     said.append)
     assert isinstance(ok, Store) and len(said) == 1
     ok.close()
+
+
+def test_open_store_where_the_store_itself_refuses_gives_a_store_that_takes_nothing(tmp_path):
+    # the folder is there but the store cannot be opened (here a folder sits where its file goes;
+    # on a board, a flash gone read-only or failing): Store says so with a StoreError, which must
+    # not stop the board at boot any more than an OSError from the folder does
+    from acomm.errors import StoreFull
+    from acomm_mp.boot import open_store
+
+    (tmp_path / "data" / "acomm.store").mkdir(parents=True)
+    said = []
+    st = open_store({"path": str(tmp_path / "data" / "acomm.store"), "capacity": 65536, "max_record": 256},
+                    said.append)
+    assert len(said) == 1 and "StoreError" in said[0] and "relaying nothing" in said[0], said
+    with pytest.raises(StoreFull):
+        st.put(1, b"x")

@@ -32,7 +32,7 @@ def open_uart(machine, lk):
         # a receive ring sized for the line (acomm_mp.boardconfig): a
         # SeaTrac status burst arrives while the loop is busy elsewhere
         u = machine.UART(lk["uart"], rxbuf=lk["rxbuf"], **kw)
-    except (TypeError, ValueError):
+    except Exception:  # a port without rxbuf= (TypeError or ValueError); a bad UART fails again below
         u = machine.UART(lk["uart"], **kw)
     return UartStream(u)
 
@@ -60,7 +60,7 @@ def open_store(st, say=print):
     try:
         _makedirs(st["path"])
         return Store(st["path"], capacity_bytes=st["capacity"], max_record=st["max_record"])
-    except OSError as e:
+    except Exception as e:  # the folder's OSError, the store's StoreError (its path and why)
         # A flash that cannot hold the store (full before the store was
         # ever made, or failing) must not stop the board at boot: main.py
         # would end at the REPL with no node and no watchdog, at every
