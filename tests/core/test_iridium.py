@@ -191,6 +191,20 @@ def test_mo_reaches_the_other_modem_by_ring_alert():
         assert d.junk == {} and d.stats["unexpected"] == 0 and d.stats["sessions_failed"] == 0
 
 
+def test_the_gateways_shore_hook_gets_the_momsn_the_modem_reported():
+    # a shore behind the gateway (DirectIP) files each MO message under the MOMSN the modem's own
+    # +SBDIX gave: the emulator counts the session's MOMSN before it hands the message on
+    r = rig()
+    got = []
+    r.net.shores.append(lambda now, imei, serial, momsn, mtmsn, data: got.append((momsn, data, r.emus[0].momsn)))
+    for n, text in ((1, b"first"), (2, b"second")):
+        assert r.run(40000, until=lambda: r.drivers[0].ready(r.now()))
+        r.drivers[0].send(r.now(), None, text)
+        assert r.run(40000, until=lambda: len(got) == n)
+    assert [(g[0], g[1]) for g in got] == [(1, b"first"), (2, b"second")], got
+    assert all(g[0] == g[2] for g in got), got  # the MOMSN +SBDIX reports, already counted
+
+
 def test_failed_sessions_back_off_then_succeed():
     r = rig()
     r.emus[0].fail_sessions(18, 2)  # RF drop twice

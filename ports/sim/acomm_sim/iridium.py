@@ -230,8 +230,9 @@ class IridiumEmulator(AtModem):
         if code <= w.MO_SUCCESS_MAX:
             if self.mo is not None:
                 sent = self.mo
-                self.net.mo(now, self, self.mo)
+                # the session's MOMSN is counted first: the gateway (and a shore behind it) reads it
                 self.momsn = (self.momsn + 1) & 0xFFFF
+                self.net.mo(now, self, self.mo)
             self.ring = False
             data, queued = self.net.take_mt(self.imei)
             mt_status = 0

@@ -60,8 +60,8 @@ class IridiumNetwork:
         if len(self.mo_log) > _LOG_MAX:
             self.mo_log.pop(0)
         for fn in self.shores:
-            # the session's MOMSN: the modem counts it up after this call
-            fn(now, emu.imei, emu.serial, (emu.momsn + 1) & 0xFFFF, emu.mtmsn, data)
+            # the session's MOMSN, which the modem counted before this call
+            fn(now, emu.imei, emu.serial, emu.momsn, emu.mtmsn, data)
         dst = None
         if len(data) >= 9 and data[:2] == b"RB":
             for m in self.modems.values():
