@@ -57,12 +57,6 @@ def arrival(site, ms, mr, metres, zs, zr, alpha=None, tl=None):
     return power, late, near
 
 
-def received(site, ms, mr, metres, zs, zr, alpha=None, tl=None):
-    """(power uPa^2, late echo ratio): arrival() without the near echoes."""
-    power, late, _ = arrival(site, ms, mr, metres, zs, zr, alpha, tl)
-    return power, late
-
-
 def chances(m, power, noise, inter_pre=0.0, inter=0.0, frac=0.0, nbits=None, thr=None):
     """What receiver model m makes of a packet of `power` over `noise` (both
     uPa^2; noise includes the late echoes), with interference inter_pre

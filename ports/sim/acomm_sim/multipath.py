@@ -67,10 +67,3 @@ def echo_ratios(horizontal_m, zs, zr, site, alpha_db_per_km, tolerance_ms):
             late += 10 ** (-loss_db / 10)
     return late, near, spread
 
-
-def late_echo_ratio(horizontal_m, zs, zr, site, alpha_db_per_km, tolerance_ms):
-    """Power of the echoes that arrive more than tolerance_ms after the
-    direct path, over the direct path's (linear), in the site's channel;
-    also the delay spread (ms) of all the echoes. -> (ratio, spread_ms)."""
-    late, _, spread = echo_ratios(horizontal_m, zs, zr, site, alpha_db_per_km, tolerance_ms)
-    return late, spread

@@ -55,7 +55,6 @@ class PhysicsChannel(Channel):
         self._rx = {}  # flight seq -> (signal power, its late echoes' power, {nbits: chances} or None when it fades)
         self._done = {}  # dst -> [(start, end, power)] arrivals that ended, as interferers
         self._longest = 1  # the longest airtime seen (ms)
-        self._thr = {}  # false alarm probability -> detector threshold (detection.q_inv)
         self._byte_p = 0.0  # chance of a damaged byte for the copy being delivered
         self.interfered = 0  # copies lost with other packets overlapping them
         self.undetected = 0  # copies whose preamble was missed
@@ -201,9 +200,7 @@ class PhysicsChannel(Channel):
             if _overlap(start, pre_end, s, e) > 0:
                 inter_pre += p
         noise = self.noise_power(name) + isi
-        thr = self._thr.get(m["pfa"])
-        if thr is None:
-            thr = self._thr[m["pfa"]] = det.q_inv(m["pfa"])
+        thr = lb.threshold(m["pfa"])
         if isinstance(packet, (bytes, bytearray)):
             nbits = (len(packet) + m["overhead_bytes"]) * 8
         else:

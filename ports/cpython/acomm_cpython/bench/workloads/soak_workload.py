@@ -94,9 +94,9 @@ RATES = {"modem_reboot": 2, "unplug": 2, "noise": 2, "power_loss": 1, "store_fil
          "outage": 0.25, "restart_pair": 1}
 PACKETS_PER_HOUR = 12  # per node
 FAR = (5000.0, 0.0, 6.0)  # out of every other node's range
-KEY = bytes(range(101, 133))
+KEY = bytes(range(101, 133))  # the soak's network key (32 bytes)
 EPOCH_2020 = 1577836800  # the port's (Unix) seconds at 2020-01-01, where the clock's fixes count from
-GOOD_FIX_MS = 600000  # the soak's network key (32 bytes)
+GOOD_FIX_MS = 600000  # every node's GPS gives a good fix this often
 COMMAND_PERIOD_MS = 180000
 COMMAND_LIFESPAN_S = 600
 
