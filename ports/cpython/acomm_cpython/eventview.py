@@ -171,6 +171,12 @@ class PacketStatus(_Outcome):
         return int(self.raw[E.PID])
 
 
+# (EV_RELAY_STATUS, origin_name, pid, status, reason): acomm/events.py names no indices for it
+# (a name there is a dict slot on every board's heap), so they are named here, for the view and
+# the console's lines
+RELAY_ORIGIN, RELAY_PID, RELAY_STATUS, RELAY_REASON = 1, 2, 3, 4
+
+
 class RelayStatus(_Outcome):
     """A packet this node took custody of as a relay, ended here undelivered (expired or failed).
     Its origin heard `transmitted` when custody moved and hears nothing more: this is the one
@@ -179,18 +185,16 @@ class RelayStatus(_Outcome):
     __slots__ = ()
     kind = "relay_status"
     _fields = ("origin", "packet_id", "status_name", "reason", "final")
-    # (EV_RELAY_STATUS, origin_name, pid, status, reason): acomm/events.py names no indices for
-    # it (a name there is a dict slot on every board's heap)
-    _STATUS = 3
-    _REASON = 4
+    _STATUS = RELAY_STATUS
+    _REASON = RELAY_REASON
 
     @property
     def origin(self) -> str:
-        return str(self.raw[1])
+        return str(self.raw[RELAY_ORIGIN])
 
     @property
     def packet_id(self) -> int:
-        return int(self.raw[2])
+        return int(self.raw[RELAY_PID])
 
 
 class Packet(Event):

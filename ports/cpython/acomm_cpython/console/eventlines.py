@@ -15,6 +15,8 @@ import acomm.events as E
 from acomm.events import (AVAIL_NAMES, EV_AVAILABILITY, EV_PACKET, EV_PACKET_STATUS, EV_RANGE_RECEIVED, EV_RECEIVED,
                           EV_REFUSED, EV_RELAY_STATUS, EV_STATUS, STATUS_NAMES, is_final)
 
+from ..eventview import RELAY_ORIGIN, RELAY_PID, RELAY_REASON, RELAY_STATUS
+
 
 def _name(i, names):
     return names[i] if 0 <= i < len(names) else str(i)
@@ -72,9 +74,9 @@ def as_dict(ev):
             d["caddy"] = caddy
         return d
     if code == EV_RELAY_STATUS:
-        # (EV_RELAY_STATUS, origin, pid, status, reason): a packet in this relay's custody ended here
-        return {"event": "relay_status", "origin": ev[1], "id": ev[2], "status": _name(ev[3], STATUS_NAMES),
-                "reason": ev[4] or "", "final": True}
+        # a packet in this relay's custody ended here
+        return {"event": "relay_status", "origin": ev[RELAY_ORIGIN], "id": ev[RELAY_PID],
+                "status": _name(ev[RELAY_STATUS], STATUS_NAMES), "reason": ev[RELAY_REASON] or "", "final": True}
     if code == EV_REFUSED:
         link = ev[E.LINK]
         return {"event": "refused", "link": link.name if link is not None else None, "src": ev[E.REFUSED_SRC],
