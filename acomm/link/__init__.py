@@ -105,6 +105,7 @@ class _Inflight:
 class Link:
     # acomm.link.neighbours.Neighbours, set by a transport that learns routes: adverts and heard frames feed it
     neighbours = None
+    overhear_segments = False  # set by a transport that learns routes: see _on_rx
 
     def __init__(
         self,
@@ -632,8 +633,10 @@ class Link:
         self._heard(src_heard, now)
         mine = dst is None or dst == self.node_id
         if f.ftype == fr.SEGMENT:
-            # the transport's: it numbers and acknowledges its own fragments
-            if mine:
+            # the transport's: it numbers and acknowledges its own fragments. On a link that
+            # routes it also hears the ones between two others, to offer a shorter way
+            # (acomm.transport.routing.Routing.overheard)
+            if mine or self.overhear_segments:
                 self._emit((_EV_SEGMENT, self, src, dst, f.seq, f.payload, f.authed))
             return
         if f.ftype == fr.CONTROL:

@@ -24,8 +24,9 @@
 #
 # Ageing: a neighbour not heard for max_age_ms has no figure (etx() -> None),
 # since the sea it was measured in has moved on; it keeps its place only
-# until the table needs room. The table holds at most `capacity` neighbours;
-# a newcomer takes the place of the one heard longest ago, but not of one
+# until the table needs room, and when heard again it starts afresh. The
+# table holds at most `capacity` neighbours; a newcomer takes the place of
+# the one heard longest ago, but not of one
 # heard within keep_ms (so a burst of new ids, a noise pattern or a forger
 # without the key, cannot wipe an established table); it is then refused
 # and counted. Signal figures the modem reports (RSSI, SNR: SeaTrac,
@@ -102,6 +103,13 @@ class Neighbours:
         e = self._entry(now, node_id)
         if e is None:
             return False
+        if ticks_diff(now, e[_HEARD]) >= self.max_age_ms:
+            # back after a silence past the age limit: what was measured before it (the polls
+            # that went unanswered while it was away) is of another sea, and would keep it
+            # unused now that it is back
+            e[_ADV] = e[_TRY] = -1
+            e[_ADV_AT] = None
+            e[_TRIES] = 0
         e[_HEARD] = now
         if advert_period_ms > 0:
             last = e[_ADV_AT]

@@ -57,6 +57,7 @@ from .route import MEDIUM_ALL, Router
 # these modules' codes, as private constants (inlined: no slot in this
 # module's dict on a board); tests/cpython/test_const_copies.py checks them
 _SEGMENT = const(5)  # acomm.frame
+_SEG_SACK = const(8)  # acomm.transport.segment: a segment header's SACK bit
 _DONE_MEMORY = const(32)  # acomm.transport.packetstore
 _MAX_LIFESPAN_MS = const(0x10000000)  # acomm.link.txqueue: the longest a link queues a request
 
@@ -636,6 +637,20 @@ class Transport:
         return rt.flood(now, data, hops_limit)
 
     def on_segment(self, now, link, src, dst, head, payload, authed=False):
+        if dst is not None and dst != self.node_id:
+            # between two other nodes, heard on a link that routes (acomm.link): only a first
+            # fragment's packet header matters here, to offer its origin a shorter way
+            rt = self.router.routing
+            g = self.guard
+            if (rt is not None and not head & _SEG_SACK and len(payload) > 4 and payload[0] == 0
+                    and (authed or g is None or not g.strict)):
+                try:
+                    h = sg.decode_packet_header(payload[1:])
+                except DecodeError:
+                    return
+                if h.relay is not None:
+                    rt.overheard(now, link, src, dst, h.relay[0], h.relay[1])
+            return
         try:
             s = sg.decode(head, payload)
         except DecodeError:

@@ -138,6 +138,7 @@ _CONTROL_PRIORITY = const(3)
 _CONTROL_LIFESPAN_S = const(30)
 _MAX_HELD = const(16)  # control frames waiting for their time; more are dropped (a flood has other copies)
 _SEEN_CAP = const(32)  # the requests remembered as seen
+_CUTS_CAP = const(8)  # the shortcuts remembered as offered: forgotten all at once when full
 
 
 # -- on the water ------------------------------------------------------------------------------
@@ -273,13 +274,15 @@ class Routing:
         self.routes = {}  # destination -> route (the fields above)
         self._searches = {}  # dest -> [tries left (-1: given up, held off), next try at]
         self._seen = []  # origin << 8 | request id, oldest first: ints, which take no heap
+        self._cuts = {}  # origin << 8 | final -> ticks: the shortcuts offered (overheard)
         self._held = []  # (not before, link name, to, payload): what poll sends when due
         # link request id -> None (a broadcast) or (link name, hop id, payload, sent again): the
         # control frames whose statuses stop here
         self._rids = {}
         self.flooder = None  # acomm.transport.flood.Flooder, made by the first flood sent or heard
         self.stats = {"requests": 0, "rebroadcasts": 0, "replies": 0, "errors": 0, "bad": 0, "duplicates": 0,
-                      "refused": 0, "control_sent": 0, "control_bytes": 0, "control_dropped": 0, "replies_rerouted": 0, "revived": 0}
+                      "refused": 0, "control_sent": 0, "control_bytes": 0, "control_dropped": 0, "replies_rerouted": 0, "revived": 0,
+                      "shortcuts": 0, "shortened": 0}
         self.finder = self.table = self
 
     # -- links and costs ------------------------------------------------------------------
@@ -551,7 +554,22 @@ class Routing:
         if m[0] == "reply":
             _, dest, dseq, origin, hops, cost, lifetime = m
             cost += self.hop_cost(now, name, hop)
-            self.offer(now, dest, hop, name, cost, dseq, lifetime)
+            if not self.offer(now, dest, hop, name, cost, dseq, lifetime) and hops == 1 and origin == self.node_id:
+                # hop hears dest itself (its shortcut, overheard, or dest's reply it passed on) and
+                # sends it there straight: no loop can form through it, so an older number does not
+                # bar that way. It is taken when cheaper, and the route keeps its own number. A leg
+                # with no figure yet (no poll went there, and a busy node sends no adverts) counts
+                # as one transmission, not two: it was heard a moment ago, and a hop that fails is
+                # called so after one stall and searched round as before
+                if self.neighbours(link).etx16(now, hop) is None:
+                    cost -= self.hop_cost(now, name, hop) // 2
+                r = self.routes.get(dest)
+                if r is not None and r[_VALID] and ticks_diff(r[_EXPIRES], now) > 0 and cost < r[_COST]:
+                    r[_NEXT] = hop
+                    r[_LINK] = name
+                    r[_COST] = cost
+                    r[_EXPIRES] = ticks_add(now, lifetime)
+                    st["shortened"] += 1
             if origin == self.node_id:
                 if dest in self._searches:
                     del self._searches[dest]  # found (even after a give-up: a late reply is news)
@@ -592,6 +610,33 @@ class Routing:
             st["rebroadcasts"] += 1
         return ()
 
+    def overheard(self, now, link, src, dst, origin, final):
+        """A packet from origin to final heard passing from src to dst, none of them this node. When
+        src only relays it, dst is not final, and this node hears origin and final itself, the way
+        through here is 2 hops against the packet's 3 or more (AODV's route shortening): a reply
+        tells origin, which takes it when it is cheaper. One per origin and final each lifetime_ms
+        (a shortcut not taken is not offered again at every packet)."""
+        if src == origin or dst == final or not self.routes_on(link):
+            return
+        d = link.discovery
+        if d.state(origin) != _AVAILABLE or d.state(final) != _AVAILABLE:
+            return
+        key = origin << 8 | final
+        cuts = self._cuts
+        t = cuts.get(key)
+        if t is not None and ticks_diff(now, t) < self.lifetime_ms:
+            return
+        if len(cuts) >= _CUTS_CAP:
+            cuts.clear()
+        cuts[key] = now
+        r = self.routes.get(final)
+        seq = r[_SEQ] if r is not None and r[_SEQ] >= 0 else 0
+        c = self.hop_cost(now, link.name, final)
+        if self.neighbours(link).etx16(now, final) is None:
+            c //= 2  # no figure yet: one transmission, as the origin counts its own leg (heard)
+        self._queue(now, link.name, origin, encode_reply(final, seq, origin, 1, c, self.lifetime_ms))
+        self.stats["shortcuts"] += 1
+
     def flood(self, now, data, hops_limit=None):
         """Floods data to every node (acomm.transport.flood.Flooder.send) -> its id."""
         self._sync_links()
@@ -606,6 +651,8 @@ class Routing:
         if len(links) != self._nlinks:
             self._nlinks = len(links)
             self.links = tuple(n for n in links if self.routes_on(links[n]))
+            for n in self.links:
+                links[n].overhear_segments = True  # for overheard()
         if self._auto_jitter:
             # a rebroadcast waits 0..jitter: wide enough that the neighbours that heard one request
             # seldom start within one short frame of each other (they would collide at the next

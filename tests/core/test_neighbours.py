@@ -1,6 +1,7 @@
 # The neighbour table of routing's first step (acomm.link.neighbours): ETX
-# from acknowledged attempts and from adverts missed, ageing, the bounded
-# table's eviction rule, signal averages, across the 2**30 tick wrap.
+# from acknowledged attempts and from adverts missed, ageing (and starting
+# afresh when heard again past it), the bounded table's eviction rule,
+# signal averages, across the 2**30 tick wrap.
 
 from acomm.compat import TICKS_MAX, ticks_add
 from acomm.errors import AcommError
@@ -83,6 +84,26 @@ def test_a_long_silence_then_an_advert_counts_a_bounded_loss():
     for i in range(1, 60):
         nb.heard(ticks_add(t, i * P), 4, advert_period_ms=P)
     assert nb.etx(ticks_add(t, 59 * P), 4) < 1.1  # and it recovers as adverts keep coming
+
+
+def test_heard_again_after_the_age_limit_it_starts_afresh():
+    # polls unanswered while it was away made it look dead; back after longer than max_age_ms,
+    # that evidence is dropped: no figure until its first advert, then one
+    nb = Neighbours(max_age_ms=3 * P)
+    t = _adverts(nb, 5, 3)
+    for _ in range(RECENT_ATTEMPTS):
+        nb.attempt(t, 5, False)
+    assert nb.etx(t, 5) > 10
+    t = ticks_add(t, 3 * P)
+    nb.heard(t, 5)  # a frame of its, not an advert
+    assert nb.etx(t, 5) is None
+    nb.heard(ticks_add(t, 1000), 5, advert_period_ms=P)
+    assert nb.etx(ticks_add(t, 1000), 5) == 1.0
+    # within the limit nothing is forgotten
+    for _ in range(RECENT_ATTEMPTS):
+        nb.attempt(t, 5, False)
+    nb.heard(ticks_add(t, 3 * P - 1), 5)
+    assert nb.etx(ticks_add(t, 3 * P - 1), 5) > 10
 
 
 def test_the_table_is_bounded_and_keeps_recent_neighbours():

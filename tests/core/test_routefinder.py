@@ -3,11 +3,13 @@
 # every request rebroadcast at most once per node, a broken hop repaired
 # where it broke (or brought back when its hop is heard again), the error
 # of a repair that failed and the way round it,
-# retries backing off, a search given up, bad bytes dropped, and no loops in
-# any table after random breaks and searches.
+# retries backing off, a search given up, bad bytes dropped, no loops in
+# any table after random breaks and searches, and a shortcut offered by a
+# node that overhears a packet going the long way round.
 
 from acomm.compat import TICKS_MAX, ticks_add, ticks_diff
 from acomm.prng import Prng
+from acomm.transport import routing as W
 from acomm.transport.routing import BROADCAST, Routing, encode_error
 from checks import adjacency
 
@@ -33,6 +35,9 @@ class _Heard:
 
     def last_heard(self, node_id):
         return self.last.get(node_id)
+
+    def state(self, node_id):
+        return 1 if node_id in self.last else 0  # available once heard (acomm.events)
 
 
 class _Link:
@@ -348,3 +353,40 @@ def test_a_ring_search_asks_the_near_nodes_first_then_the_whole_network():
     assert net.f[4].lookup(net.now, 1) is not None and net.f[5].lookup(net.now, 1) is None
     net.run(20000)  # the next try floods the chain
     assert f1.lookup(net.now, 8) is not None and f1.stats["requests"] == 2
+
+
+def test_a_node_that_overhears_the_long_way_offers_a_shortcut_and_the_origin_takes_it():
+    # 1-4-5-3 is the way 1 found while 2 was away; 2 is back, hears 1 and 3 themselves, and
+    # overhears 1's packet for 3 going from 4 to 5: 2 hops through it against 3
+    net = Net([(1, 4), (4, 5), (5, 3), (1, 2), (2, 3), (2, 4), (2, 5)], jitter_ms=0)
+    for n in (1, 3, 4, 5):
+        net.cut(2, n)
+    net.f[1].search(net.now, 3)
+    net.run(10000)
+    assert net.path(1, 3) == [1, 4, 5, 3]
+    seq = net.f[1].routes[3][3]
+    for n in (1, 3, 4, 5):
+        net.adj[2].add(n)
+        net.adj[n].add(2)
+    f, link = net.f[2], net.link[2]
+    f.overheard(net.now, link, 1, 4, 1, 3)  # from the origin itself: its first hop, no detour seen
+    f.overheard(net.now, link, 5, 3, 1, 3)  # to the destination itself: the last hop
+    f.overheard(net.now, link, 4, 5, 1, 3)  # 2 has heard neither 1 nor 3 yet
+    assert f.stats["shortcuts"] == 0
+    link.discovery.last[1] = link.discovery.last[3] = net.now
+    f.overheard(net.now, link, 4, 5, 1, 3)
+    f.overheard(net.now, link, 4, 5, 1, 3)  # the next fragment: offered once a lifetime
+    assert f.stats["shortcuts"] == 1
+    net.run(2000)
+    g = net.f[1]
+    # (2 sends to 3 straight: a node heard is its own hop, acomm.transport.route)
+    assert g.stats["shortened"] == 1 and g.lookup(net.now, 3)[0] == 2
+    assert g.routes[3][3] == seq  # the route keeps its own number: the offer's (0) is older
+    # a route already as short is not moved, and an older number from further away never wins
+    f._cuts.clear()
+    f.overheard(net.now, link, 4, 5, 1, 3)
+    net.run(2000)
+    assert g.stats["shortened"] == 1 and g.lookup(net.now, 3)[0] == 2
+    g.heard(net.now, net.link[1], 4, W.encode_reply(3, 0, 1, 2, 0, 60000))
+    assert g.stats["shortened"] == 1 and g.lookup(net.now, 3)[0] == 2
+    assert all(x.stats["errors"] == 0 for x in net.f.values())
