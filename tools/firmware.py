@@ -194,7 +194,8 @@ def _missing_tools():
     # the compiler, newlib is missing too (asking only for the compiler
     # left a fresh machine, and CI, with no libc.a and no firmware).
     if shutil.which("arm-none-eabi-gcc") is None:
-        miss += ["gcc-arm-none-eabi", "libnewlib-arm-none-eabi"]
+        # all three: without the C++ library the check below finds it missing after the install
+        miss += ["gcc-arm-none-eabi", "libnewlib-arm-none-eabi", "libstdc++-arm-none-eabi-newlib"]
     else:
         libc = subprocess.run(["arm-none-eabi-gcc", "-print-file-name=libc.a"], capture_output=True, text=True).stdout
         if not os.path.isabs(libc.strip()):
