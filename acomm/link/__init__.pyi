@@ -33,6 +33,8 @@ class Link:
     max_retries: int
     dup_window_ms: int
     overhear: bool
+    # set by a transport that learns routes: SEGMENT frames between two others are handed up too
+    overhear_segments: bool
     ack_timeout_ms: int
     stats: Dict[str, int]
     def __init__(
