@@ -175,7 +175,9 @@ class Forger:
         seal = minute // 5 % 2 == 1
         if kind == 0:
             # forged replies: a route to another node, fresher and cheaper than any, via the
-            # attacker's beacon, or via the third node (a route that the forgery moves)
+            # attacker's beacon, or via the third node (a route that the forgery moves); that one,
+            # when the victim knows a number, as a shortcut (hops 1, the number it holds, which a
+            # node that overhears the long way offers: taken when cheaper)
             for k in range(2):
                 victim = NAMES[(minute // 5 + k) % 3]
                 others = [n for n in NAMES if n != victim]
@@ -184,7 +186,9 @@ class Forger:
                 e = self.table(victim).routes.get(ADDR[dest])
                 known = -1 if e is None else e[SEQ]  # the newest number the victim knows, or -1
                 seq = (known + 1 + r.below(1000)) % W.UNKNOWN_SEQ if known >= 0 else r.range(1, 30000)
-                payload = W.encode_reply(ADDR[dest], seq, ADDR[victim], 0, 0, 255 * W.LIFETIME_UNIT_MS)
+                cut = k == 1 and known >= 0
+                payload = W.encode_reply(ADDR[dest], known if cut else seq, ADDR[victim], 1 if cut else 0, 0,
+                                         255 * W.LIFETIME_UNIT_MS)
                 self._control(at + 300 * k, via, ADDR[victim], payload, "route_reply", seal)
         elif kind == 1:
             # forged errors from a live route's next hop, naming its destination, number raised

@@ -32,7 +32,9 @@
 #                   compressed body announcing 1 MiB (decompression bomb)
 #   route_reply     a route reply to a node for another, fresher (a higher
 #                   sequence number) and cheaper than any it holds, via the
-#                   attacker's beacon or via the third node
+#                   attacker's beacon or via the third node (that one as a
+#                   shortcut when the node knows a number: hops 1, the
+#                   number it holds, cost 0)
 #   route_error     a route error from a live route's next hop naming its
 #                   destination, with a raised sequence number
 #   route_request_flood
@@ -300,7 +302,9 @@ class Attack(Forger):
                 bad = t.stats["rx_bad"]
                 refused = sum(t.guard.refused.values())
                 on_segment(now, link, src, dst, head, data, authed)
-                if kind == "sack_bitmap" and t.stats["rx_bad"] == bad and sum(
+                # a routing node is handed the segments it overhears too (for shortcuts): only the
+                # one the forgery was addressed to can take it
+                if kind == "sack_bitmap" and dst == t.node_id and t.stats["rx_bad"] == bad and sum(
                         t.guard.refused.values()) == refused:
                     self.won[kind] += 1
                 n = sum(r.size for r in t._rx.values())
