@@ -626,12 +626,14 @@ class Routing:
         t = cuts.get(key)
         if t is not None and ticks_diff(now, t) < self.lifetime_ms:
             return
+        r = self.routes.get(final)
+        c = self.hop_cost(now, link.name, final)
+        if r is not None and r[_VALID] and r[_NEXT] != final and ticks_diff(r[_EXPIRES], now) > 0 and r[_COST] < c:
+            return  # a learned route is cheaper than the direct hop: this node would not send straight (hop_on)
         if len(cuts) >= _CUTS_CAP:
             cuts.clear()
         cuts[key] = now
-        r = self.routes.get(final)
         seq = r[_SEQ] if r is not None and r[_SEQ] >= 0 else 0
-        c = self.hop_cost(now, link.name, final)
         if self.neighbours(link).etx16(now, final) is None:
             c //= 2  # no figure yet: one transmission, as the origin counts its own leg (heard)
         self._queue(now, link.name, origin, encode_reply(final, seq, origin, 1, c, self.lifetime_ms))

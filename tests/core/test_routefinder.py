@@ -390,3 +390,16 @@ def test_a_node_that_overhears_the_long_way_offers_a_shortcut_and_the_origin_tak
     g.heard(net.now, net.link[1], 4, W.encode_reply(3, 0, 1, 2, 0, 60000))
     assert g.stats["shortened"] == 1 and g.lookup(net.now, 3)[0] == 2
     assert all(x.stats["errors"] == 0 for x in net.f.values())
+
+
+def test_no_shortcut_is_offered_by_a_node_that_would_not_send_straight():
+    # 2 hears 3, but holds a learned route to it that is cheaper than the direct hop (the
+    # router's rule: it would send that way): its offer would not be the 2 hops it claims
+    f, link = _node(2)
+    link.discovery.last[1] = link.discovery.last[3] = T0
+    f.offer(T0, 3, 5, "acoustic", HOP - 1, 7, 60000)
+    f.overheard(T0, link, 4, 5, 1, 3)
+    assert f.stats["shortcuts"] == 0
+    f.broken(T0, 5, "acoustic")  # that route gone: the direct hop is its way, and it offers
+    f.overheard(T0, link, 4, 5, 1, 3)
+    assert f.stats["shortcuts"] == 1
