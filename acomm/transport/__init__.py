@@ -57,7 +57,7 @@ from .route import MEDIUM_ALL, Router
 # these modules' codes, as private constants (inlined: no slot in this
 # module's dict on a board); tests/cpython/test_const_copies.py checks them
 _SEGMENT = const(5)  # acomm.frame
-_SEG_SACK = const(8)  # acomm.transport.segment: a segment header's SACK bit
+_K_SACK = const(8)  # acomm.transport.segment: a segment header's SACK bit
 _DONE_MEMORY = const(32)  # acomm.transport.packetstore
 _MAX_LIFESPAN_MS = const(0x10000000)  # acomm.link.txqueue: the longest a link queues a request
 
@@ -642,7 +642,7 @@ class Transport:
             # fragment's packet header matters here, to offer its origin a shorter way
             rt = self.router.routing
             g = self.guard
-            if (rt is not None and not head & _SEG_SACK and len(payload) > 4 and payload[0] == 0
+            if (rt is not None and not head & _K_SACK and len(payload) > 4 and payload[0] == 0
                     and (authed or g is None or not g.strict)):
                 try:
                     h = sg.decode_packet_header(payload[1:])
