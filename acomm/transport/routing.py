@@ -553,22 +553,20 @@ class Routing:
             return ()
         if m[0] == "reply":
             _, dest, dseq, origin, hops, cost, lifetime = m
-            cost += self.hop_cost(now, name, hop)
+            leg = self.hop_cost(now, name, hop)
+            cost += leg
             if not self.offer(now, dest, hop, name, cost, dseq, lifetime) and hops == 1 and origin == self.node_id:
                 # hop hears dest itself (its shortcut, overheard, or dest's reply it passed on) and
                 # sends it there straight: no loop can form through it, so an older number does not
-                # bar that way. It is taken when cheaper, and the route keeps its own number. A leg
-                # with no figure yet (no poll went there, and a busy node sends no adverts) counts
-                # as one transmission, not two: it was heard a moment ago, and a hop that fails is
-                # called so after one stall and searched round as before
+                # bar that way. It is offered again under the live route's own number, which the
+                # table's rule takes when cheaper. A leg with no figure yet (no poll went there, and
+                # a busy node sends no adverts) counts as one transmission, not two: it was heard a
+                # moment ago, and a hop that fails is called so after one stall and searched round
                 if self.neighbours(link).etx16(now, hop) is None:
-                    cost -= self.hop_cost(now, name, hop) // 2
+                    cost -= leg // 2
                 r = self.routes.get(dest)
-                if r is not None and r[_VALID] and ticks_diff(r[_EXPIRES], now) > 0 and cost < r[_COST]:
-                    r[_NEXT] = hop
-                    r[_LINK] = name
-                    r[_COST] = cost
-                    r[_EXPIRES] = ticks_add(now, lifetime)
+                if (r is not None and r[_VALID] and ticks_diff(r[_EXPIRES], now) > 0
+                        and self.offer(now, dest, hop, name, cost, r[_SEQ], lifetime)):
                     st["shortened"] += 1
             if origin == self.node_id:
                 if dest in self._searches:
