@@ -54,51 +54,20 @@ rp2040-emulator:
 	fi
 
 # Every runtime runs and prints its own closing line: pytest on CPython,
-# then the core suite on the MicroPython unix port, on the Cortex-M3
-# firmware under qemu, on the i386 build and on the RP2040 firmware in its
-# emulator. The target fails if any fails. The RP2040's run is the longest
-# and needs one core of its own: it runs beside the Cortex-M3 and i386
-# runs, its output printed when it ends.
-# tools/browser.py installs Debian's chromium for the console's browser
-# test when it is missing and this runs as root (else the test skips).
-# When the firmware cannot be built on this machine (exit 3), its three
-# runtimes are skipped with one line saying how to enable them; a firmware
-# build that fails is a failure. Without Node.js (no emulator) the RP2040
-# alone is skipped, with one line (exit 3 of board_runtests.py).
-# pytest runs as two processes side by side: the tests that boot emulated
-# boards (EMULATOR_TESTS: two thirds of its time, each on one core) and
-# all the others (mostly waiting on real-time ptys and sockets); the
-# emulators' output is printed when both end. They stage `acomm flash`
-# files apart (ACOMM_WORK_DIR), so the two never share a folder. The
-# others run at a lower priority: an emulated board keeps real time only
-# with the CPU it needs (its Iridium session missed its window once while
-# the MAVLink bridges' real-time tests ran beside it), and they have
-# minutes of slack before the boards' tests end.
+# the core suite on the MicroPython unix port, on the Cortex-M3 firmware
+# under qemu, on the i386 build and on the RP2040 firmware in its
+# emulator. The target fails if any fails. tools/testall.py builds the
+# firmware first, then starts them side by side by priority (why and how:
+# its header). tools/browser.py installs Debian's chromium for the
+# console's browser test when it is missing and this runs as root (else
+# the test skips). When the firmware cannot be built on this machine (exit
+# 3), its three runtimes are skipped with one line saying how to enable
+# them; a firmware build that fails is a failure. Without Node.js (no
+# emulator) the RP2040 alone is skipped, with one line (exit 3 of
+# board_runtests.py).
 I386_HEAP = 2M
-EMULATOR_TESTS = $(addprefix tests/cpython/,test_buoy_on_pico.py test_buoy_faults_on_pico.py \
-	test_footprint_pico.py test_board_on_qemu.py test_footprint_qemu.py test_rp2040_runner.py)
 test: $(VENV)/.dev rp2040-emulator
-	@$(BIN)/python tools/firmware.py build; f=$$?; \
-	$(BIN)/python tools/browser.py; \
-	mkdir -p build; \
-	ACOMM_WORK_DIR=$(CURDIR)/build/emulator-tests $(BIN)/python -m pytest -q -p no:cacheprovider \
-	  $(EMULATOR_TESTS) > build/pytest-emulators.log 2>&1 & q=$$!; \
-	nice -n 10 $(BIN)/python -m pytest -q tests $(addprefix --ignore=,$(EMULATOR_TESTS)); a=$$?; \
-	wait $$q; g=$$?; echo "pytest, the emulated boards' tests:"; cat build/pytest-emulators.log; \
-	test $$g -eq 0 || a=1; \
-	PATH="$(CURDIR)/$(BIN):$$PATH" $(BIN)/micropython tools/mp_runtests.py tests/core; b=$$?; \
-	c=0; d=0; e=0; \
-	if [ $$f -eq 0 ]; then \
-	  $(BIN)/python tools/board_runtests.py --target rp2040 > build/rp2040-tests.log 2>&1 & p=$$!; \
-	  $(BIN)/python tools/board_runtests.py; c=$$?; \
-	  build/firmware/micropython-i386 -X heapsize=$(I386_HEAP) tools/mp_runtests.py --frozen --name micropython-i386 tests/core; d=$$?; \
-	  wait $$p; e=$$?; cat build/rp2040-tests.log; test $$e -eq 3 && e=0; \
-	elif [ $$f -eq 3 ]; then \
-	  echo "micropython-cortex-m3, micropython-i386, micropython-rp2040: skipped: the firmware cannot be built here (the firmware: line above says what is missing; then run make firmware)"; \
-	else \
-	  echo "micropython-cortex-m3, micropython-i386, micropython-rp2040: not run: the firmware build failed (above)"; \
-	fi; \
-	test $$a -eq 0 && test $$b -eq 0 && test $$c -eq 0 && test $$d -eq 0 && test $$e -eq 0 && test $$f -ne 1
+	@$(BIN)/python tools/testall.py --i386-heap $(I386_HEAP)
 
 test-firmware: firmware
 	$(BIN)/python tools/board_runtests.py

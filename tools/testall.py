@@ -1,0 +1,129 @@
+#!/usr/bin/env python3
+# `make test`: every runtime's tests, side by side on a 2-core machine.
+#
+# What runs (each prints its own closing line, and the run fails if any fails):
+#   pytest on CPython, as two processes: the tests that boot emulated boards
+#       (EMULATOR_TESTS) and all the others;
+#   the core suite on the MicroPython unix port;
+#   with the firmware built (tools/firmware.py build, first): the core suite
+#       on the Cortex-M3 firmware under qemu, on the i386 build and on the
+#       RP2040 firmware in its emulator (the list of tools/rp2040_tests.txt).
+#
+# How it is laid out, and why. Four of these are long and each holds one
+# core while it runs: the emulated boards' pytest (the Pico emulator runs
+# below real time, about 1,100 s on a slow 2-core machine), the RP2040's
+# core tests (about 850 s), the Cortex-M3's (about 650 s); the other pytest
+# (about 560 s) mostly waits on real-time ptys and sockets. One after the
+# other on two cores they took 2,262 s and CI 2,378 s on such machines, so
+# they start together, by priority:
+#   - the emulated boards' pytest at normal priority: a board there keeps
+#     real time only with the CPU it needs (its Iridium session missed its
+#     window once beside the MAVLink bridges' real-time tests);
+#   - the other pytest, then the unix port, at nice 10: their real-time
+#     tests have generous bounds and wait most of the time;
+#   - the Cortex-M3's and the RP2040's core tests at nice 19: they keep
+#     simulated time (each test has minutes of limit) and take whatever CPU
+#     the others leave, all of it once those end;
+#   - the i386 build's suite (about a minute) once the emulated boards'
+#     pytest has ended.
+# What runs in the background goes to a log under build/ that is printed
+# when it ends, so that the output reads in one piece per runtime.
+#
+#   python3 tools/testall.py [--i386-heap 2M]
+import argparse
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BUILD = os.path.join(ROOT, "build")
+BIN = os.path.dirname(sys.executable)
+PY = sys.executable
+EMULATOR_TESTS = ["tests/cpython/" + f for f in (
+    "test_buoy_on_pico.py", "test_buoy_faults_on_pico.py", "test_footprint_pico.py",
+    "test_board_on_qemu.py", "test_footprint_qemu.py", "test_rp2040_runner.py")]
+
+
+def _niced(n):
+    return lambda: os.nice(n)
+
+
+class Job:
+    """A command run in the background with its output in a log under build/."""
+
+    def __init__(self, name, cmd, log, nice=0, env=None):
+        self.name, self.log = name, os.path.join(BUILD, log)
+        self.t0 = time.monotonic()
+        self._f = open(self.log, "wb")
+        self.proc = subprocess.Popen(cmd, cwd=ROOT, stdout=self._f, stderr=subprocess.STDOUT,
+                                     preexec_fn=_niced(nice) if nice else None, env=env)
+
+    def finish(self, header=None):
+        """Waits for the command, prints its log (after header) -> its exit status."""
+        rc = self.proc.wait()
+        self._f.close()
+        if header:
+            print(header)
+        with open(self.log, "rb") as f:
+            sys.stdout.write(f.read().decode(errors="replace"))
+        print("(%s: %d s)" % (self.name, time.monotonic() - self.t0))
+        sys.stdout.flush()
+        return rc
+
+
+def run(name, cmd, nice=0, env=None):
+    """Runs cmd in the foreground, its output on ours, then a line with its time -> its exit status."""
+    sys.stdout.flush()
+    t0 = time.monotonic()
+    rc = subprocess.call(cmd, cwd=ROOT, preexec_fn=_niced(nice) if nice else None, env=env)
+    print("(%s: %d s)" % (name, time.monotonic() - t0))
+    sys.stdout.flush()
+    return rc
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description="every runtime's tests, side by side (make test)")
+    p.add_argument("--i386-heap", default="2M", help="the i386 build's GC heap (default %(default)s)")
+    a = p.parse_args(argv)
+    os.makedirs(BUILD, exist_ok=True)
+    fw = run("firmware", [PY, "tools/firmware.py", "build"])
+    run("browser", [PY, "tools/browser.py"])
+    env = dict(os.environ, ACOMM_WORK_DIR=os.path.join(BUILD, "emulator-tests"))
+    boards_pytest = Job("pytest, the emulated boards", [PY, "-m", "pytest", "-q", "-p", "no:cacheprovider"]
+                        + EMULATOR_TESTS, "pytest-emulators.log", env=env)
+    cm3 = rp2040 = None
+    if fw == 0:
+        cm3 = Job("micropython-cortex-m3", [PY, "tools/board_runtests.py"], "cortex-m3-tests.log", nice=19)
+        rp2040 = Job("micropython-rp2040", [PY, "tools/board_runtests.py", "--target", "rp2040"],
+                     "rp2040-tests.log", nice=19)
+    failed = []
+    if run("pytest", [PY, "-m", "pytest", "-q", "tests"] + ["--ignore=" + t for t in EMULATOR_TESTS], nice=10):
+        failed.append("pytest")
+    path = dict(os.environ, PATH=BIN + os.pathsep + os.environ.get("PATH", ""))
+    if run("micropython", [os.path.join(BIN, "micropython"), "tools/mp_runtests.py", "tests/core"], nice=10, env=path):
+        failed.append("micropython")
+    if boards_pytest.finish("pytest, the emulated boards' tests:"):
+        failed.append("pytest (emulated boards)")
+    if fw == 0:
+        if run("micropython-i386", [os.path.join(BUILD, "firmware", "micropython-i386"), "-X", "heapsize=" + a.i386_heap,
+                "tools/mp_runtests.py", "--frozen", "--name", "micropython-i386", "tests/core"]):
+            failed.append("micropython-i386")
+        if cm3.finish():
+            failed.append("micropython-cortex-m3")
+        if rp2040.finish() not in (0, 3):  # 3: no emulator here, said in its one line
+            failed.append("micropython-rp2040")
+    elif fw == 3:
+        print("micropython-cortex-m3, micropython-i386, micropython-rp2040: skipped: the firmware cannot be "
+              "built here (the firmware: line above says what is missing; then run make firmware)")
+    else:
+        print("micropython-cortex-m3, micropython-i386, micropython-rp2040: not run: the firmware build "
+              "failed (above)")
+        failed.append("firmware")
+    if failed:
+        print("make test: failed: %s" % ", ".join(failed))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
