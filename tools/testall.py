@@ -48,7 +48,8 @@ EMULATOR_TESTS = ["tests/cpython/" + f for f in (
 
 
 def _niced(n):
-    return lambda: os.nice(n)
+    # a child's preexec_fn that lowers its priority by n (None: as ours)
+    return (lambda: os.nice(n)) if n else None
 
 
 class Job:
@@ -59,7 +60,7 @@ class Job:
         self.t0 = time.monotonic()
         self._f = open(self.log, "wb")
         self.proc = subprocess.Popen(cmd, cwd=ROOT, stdout=self._f, stderr=subprocess.STDOUT,
-                                     preexec_fn=_niced(nice) if nice else None, env=env)
+                                     preexec_fn=_niced(nice), env=env)
 
     def finish(self, header=None):
         """Waits for the command, prints its log (after header) -> its exit status."""
@@ -78,7 +79,7 @@ def run(name, cmd, nice=0, env=None):
     """Runs cmd in the foreground, its output on ours, then a line with its time -> its exit status."""
     sys.stdout.flush()
     t0 = time.monotonic()
-    rc = subprocess.call(cmd, cwd=ROOT, preexec_fn=_niced(nice) if nice else None, env=env)
+    rc = subprocess.call(cmd, cwd=ROOT, preexec_fn=_niced(nice), env=env)
     print("(%s: %d s)" % (name, time.monotonic() - t0))
     sys.stdout.flush()
     return rc
