@@ -12,6 +12,8 @@
 // line and answers one line: reset -> ok (power cycle: new chip, RAM cleared,
 // flash kept; answered once done), save -> ok, time -> simulated ms, stats -> JSON
 // counters, cpu -> JSON PC/LR/WFI state (to see where a stuck firmware waits).
+// stats.sleep_ms is the simulated time the core spent in WFI/WFE since power-on (resets
+// included): what is left of sim_ms is the time it ran, its CPU duty on a real chip.
 // --speed-cap: simulated time never runs ahead of wall time times this (0: no cap).
 import fs from 'node:fs';
 import net from 'node:net';
@@ -42,7 +44,8 @@ function die(msg) { process.stderr.write(`rp2040 runner: ${msg}\n`); process.exi
 // full when a byte arrived; _rx_disabled: the UART was off (the byte is lost, as on a board)
 const stats = { resets: 0, last_reset_ms: null, ctl_resets: 0, machine_resets: 0, watchdog_resets: 0,
   flash_erases: 0, flash_programs: 0, usb_in_bytes: 0, usb_in_dropped: 0, usb_out_bytes: 0, usb_out_dropped: 0,
-  emulator_warnings: 0, emulator_errors: 0 };
+  emulator_warnings: 0, emulator_errors: 0, sleep_ms: 0 };
+let sleepNs = 0; // WFI/WFE time, in stats.sleep_ms when asked (a float add per wait, not per instruction)
 for (const u of ['uart0', 'uart1']) {
   for (const k of ['rx_bytes', 'rx_dropped', 'rx_overrun', 'rx_disabled', 'tx_bytes', 'tx_dropped', 'fw_baud']) stats[`${u}_${k}`] = 0;
 }
@@ -376,10 +379,11 @@ function run() {
         // firmware's timeouts must mean the same to programs on the TCP side)
         const next = clock.nextAlarm ? clock.nanos + clock.nanosToNextAlarm : Infinity;
         if (next > cap || next === Infinity) { // nothing due before the cap, or at all
-          if (cap !== Infinity && cap > clock.nanos) clock.tick(cap - clock.nanos);
+          if (cap !== Infinity && cap > clock.nanos) { sleepNs += cap - clock.nanos; clock.tick(cap - clock.nanos); }
           idle = true;
           break slice;
         }
+        sleepNs += next - clock.nanos;
         clock.tick(next - clock.nanos);
       } else {
         clock.tick(core.executeInstruction() * nsPerCycle);
@@ -405,7 +409,7 @@ function ctlCommand(line, reply) {
   if (cmd === 'reset') { afterReset.push(() => reply('ok')); requestReset('ctl'); }
   else if (cmd === 'save') { try { saveFlash(); reply(opts.flash ? 'ok' : 'error no --flash image'); } catch (e) { reply(`error ${e.message}`); } }
   else if (cmd === 'time') reply((simNs() / 1e6).toFixed(3));
-  else if (cmd === 'stats') reply(JSON.stringify({ ...stats, sim_ms: simNs() / 1e6, wall_ms: performance.now() - startWall }));
+  else if (cmd === 'stats') reply(JSON.stringify({ ...stats, sleep_ms: sleepNs / 1e6, sim_ms: simNs() / 1e6, wall_ms: performance.now() - startWall }));
   else if (cmd === 'cpu') reply(JSON.stringify({ pc: chip.core.PC, lr: chip.core.LR, waiting: chip.core.waiting, primask: chip.core.PM, ipsr: chip.core.IPSR }));
   else if (cmd) reply(`error unknown command ${JSON.stringify(cmd)} (reset, save, time, stats, cpu)`);
 }
