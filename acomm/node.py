@@ -75,6 +75,10 @@ class Node:
         # reads and writes that raised OSError (an unplugged USB adapter, a
         # UART error): the link goes on without those bytes
         self.stream_errors = 0
+        # reads that brought bytes and writes that took some, for ever: a
+        # board's loop (acomm_mp.runloop) steps an idle node less often and
+        # tells idle from busy by whether a step moved this
+        self.moved = 0
         # the transport (acomm.transport.Transport, attach()): it gets the
         # links' SEGMENT frames and the statuses of its own requests
         self.transport = None
@@ -237,10 +241,13 @@ class Node:
         # OSError) must not stop the node: its other links, its transport
         # and its timers go on, and the driver recovers when bytes come back.
         try:
-            return stream.read(_READ_CHUNK)
+            data = stream.read(_READ_CHUNK)
         except OSError:
             self.stream_errors += 1
             return None
+        if data:
+            self.moved += 1
+        return data
 
     def _write(self, io, link, stream):
         # machine.UART.write may take only part of the bytes (or return None
@@ -260,8 +267,10 @@ class Node:
             self.stream_errors += 1
             io[2] = b""
             return
-        if n is None:
+        if not n:
             n = 0
+        else:
+            self.moved += 1
         io[2] = out[n:] if n < len(out) else b""
 
     async def run(self, period_ms=10, stop=None):

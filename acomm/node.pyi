@@ -24,6 +24,7 @@ class Node:
     backlog: List[_Event]
     backlog_dropped: int
     stream_errors: int
+    moved: int
     transport: Optional[Transport]
     wallclock: Optional[WallClock]
     def __init__(

@@ -298,12 +298,15 @@ def test_the_config_module_is_released_once_checked():
     assert run_blocking is not None
 
 
-def test_the_plain_loop_ticks_each_step_and_sleeps_what_is_left():
+def test_the_plain_loop_polls_each_step_and_sleeps_what_is_left():
     from acomm_mp.runloop import run_blocking
 
     class _Board:
         cfg = {"step_ms": 10}
         ticks = []
+
+        def poll(self, now):
+            self.tick(now)
 
         def tick(self, now):
             self.ticks.append(now)
@@ -330,6 +333,77 @@ def test_the_plain_loop_ticks_each_step_and_sleeps_what_is_left():
     b.tick = slow
     run_blocking(b, clock=lambda: t[0], sleep_ms=sleep, stop=lambda: len(b.ticks) >= 2)
     assert slept == [] and b.ticks[1] - b.ticks[0] == 25
+
+
+def test_an_idle_node_steps_every_idle_ms_and_bytes_wake_it_within_a_step():
+    cfg = check(_config("buoy_pico"))
+    assert cfg["idle_ms"] == 100  # the default
+    uarts = [FakeUART(), FakeUART()]
+    given = list(uarts)
+    board = build(cfg, lambda lk: given.pop(0))
+    board.wdt = _Wdt()
+    for k in range(3000):  # 30 s: the drivers' start-up is over, the links quiet
+        board.tick(k * 10)
+    ticked = []
+    real = board.tick
+
+    def tick(now):
+        ticked.append(now)
+        real(now)
+
+    board.tick = tick
+    # quiet: one step per idle_ms, the watchdog fed on every poll all the same
+    t0 = 30000
+    for k in range(100):
+        board.poll(t0 + k * 10)
+    # (a step at which a driver wrote a command is followed by one more)
+    gaps = [b - a for a, b in zip(ticked, ticked[1:])]
+    assert 9 <= len(ticked) <= 13 and max(gaps) <= 100 and gaps.count(100) >= 7, ticked
+    assert board.wdt.fed >= 3000 + 100 and board.stats["rests"] >= 89, (board.wdt.fed, board.stats)
+    # a byte on a UART: the next poll steps the node though idle_ms has not
+    # passed, and so does the one after (that step moved the byte)
+    t1 = t0 + 1000
+    board.tick(t1)
+    del ticked[:]
+    uarts[0].inject(b"\x00")
+    board.poll(t1 + 10)
+    board.poll(t1 + 20)
+    assert ticked == [t1 + 10, t1 + 20], ticked
+    # bad idle_ms values are named
+    c = _copy(_config("buoy_pico"))
+    for bad in (0, 5, 10001, "100"):
+        c["idle_ms"] = bad
+        c["step_ms"] = 10
+        assert "idle_ms" in _error(c), bad
+
+
+def test_the_loop_steps_after_a_step_that_moved_bytes_until_one_moves_none():
+    from acomm_mp.runloop import Board
+
+    class _Node:
+        moved = 0
+        steps = []
+
+        def step(self, now):
+            self.steps.append(now)
+            if now in io:
+                self.moved += 1
+
+    io = (0, 10, 20)  # three steps that read or wrote, then quiet
+    n = _Node()
+    b = Board({"idle_ms": 100, "gc_ms": 1000, "name": "t"}, n, None, None, print, ())
+    for t in range(0, 400, 10):
+        b.poll(t)
+    # 0, 10, 20 moved bytes: each was followed by a step; 30 moved none, so
+    # the next is at 130, then 230, 330
+    assert n.steps == [0, 10, 20, 30, 130, 230, 330], n.steps
+    assert b.stats["ticks"] == 7 and b.stats["rests"] == 33
+    # a stream that cannot say whether bytes wait makes every poll a step
+    n.steps = []
+    b = Board({"idle_ms": 100, "gc_ms": 1000, "name": "t"}, n, None, None, print, (object(),))
+    for t in range(1000, 1050, 10):
+        b.poll(t)
+    assert n.steps == [1000, 1010, 1020, 1030, 1040], n.steps
 
 
 def test_a_network_key_in_the_config_secures_every_link_and_a_bad_one_is_refused():

@@ -20,7 +20,8 @@ ACOMM = os.path.join(os.path.dirname(sys.executable), "acomm")
 _missing = picobuoy.missing()
 FIGURES = ("rp2040_buoy_relayed_packets", "rp2040_buoy_lost_packets", "rp2040_buoy_duplicate_packets",
            "rp2040_buoy_resets", "rp2040_flash_seconds", "rp2040_boot_to_ready_ms",
-           "rp2040_first_boot_to_ready_ms", "rp2040_buoy_heap_free_bytes", "rp2040_buoy_heap_free_after_reset_bytes")
+           "rp2040_first_boot_to_ready_ms", "rp2040_buoy_heap_free_bytes", "rp2040_buoy_heap_free_after_reset_bytes",
+           "rp2040_buoy_idle_cpu_percent")
 
 
 @pytest.fixture(scope="module")
@@ -59,6 +60,9 @@ def test_the_figures(board):
     # about half of it
     for k in ("rp2040_buoy_heap_free_bytes", "rp2040_buoy_heap_free_after_reset_bytes"):
         assert 100000 < v[k] < 245888, v
+    # an idle buoy steps its node every idle_ms (100), not every loop pass
+    # (10 ms): that kept its core busy 37 % of the time
+    assert 0 < v["rp2040_buoy_idle_cpu_percent"] < 15, v
 
 
 def test_the_diver_report_reached_shore_once(board):

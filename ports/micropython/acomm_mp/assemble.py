@@ -75,7 +75,8 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
         # imported only here: a board without a GPS never loads the reader
         from acomm.drivers.gps import GpsReader
 
-        node.add_time_source(GpsReader(), open_uart(g))
+        uarts.append(open_uart(g))
+        node.add_time_source(GpsReader(), uarts[-1])
     # no store: the transport keeps its packets in RAM (a MemoryStore)
     store = open_store(st) if st is not None and open_store is not None else None
     gc.collect()
@@ -92,4 +93,4 @@ def build(cfg, open_uart, clock=None, wall=None, open_store=None, listener=None,
 
         station = Station(node, transport, report_to=sc["report_to"], report_period_s=sc["report_period_s"],
                           make_report=make_report, alarm_to=sc["alarm_to"])
-    return Board(cfg, node, transport, station, say)
+    return Board(cfg, node, transport, station, say, uarts)

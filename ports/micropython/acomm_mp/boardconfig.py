@@ -28,6 +28,9 @@
 #   max_packet    the transport's largest packet, bytes
 #   watchdog_ms   machine.WDT timeout, 0 for none
 #   step_ms       main loop period; gc_ms: garbage collection period
+#   idle_ms       step_ms..10000: how often the loop steps a node that has
+#                 nothing to do (no bytes waiting on its UARTs, none moved
+#                 by its last step; acomm_mp.runloop), default 100
 #   links         one dict per modem: name, modem (acomm.drivers.registry), uart,
 #                 baud, tx and rx pins (None: the board's default), address
 #                 (default node_id), medium, link (Link options), options
@@ -266,6 +269,9 @@ def check(cfg):
     out["watchdog_ms"] = wd
     out["step_ms"] = _int(cfg, "step_ms", 1, 1000, "step_ms", 10)
     out["gc_ms"] = _int(cfg, "gc_ms", 10, 60000, "gc_ms", 1000)
+    out["idle_ms"] = _int(cfg, "idle_ms", 1, 10000, "idle_ms", 100)
+    if out["idle_ms"] < out["step_ms"]:
+        _fail("idle_ms", "step_ms..10000", out["idle_ms"])
     links = cfg.get("links")
     if not isinstance(links, (list, tuple)) or not links:
         _fail("links", "a non-empty list of link dicts", links)

@@ -16,6 +16,10 @@ class UartStream:
         self.bytes_in = 0
         self.bytes_out = 0
 
+    def any(self):
+        """Whether bytes wait (the UART's count); the loop's cheap question before it steps an idle node."""
+        return self.uart.any()
+
     def read(self, n=256):
         """Up to n bytes that are waiting, or None when none are: never blocks."""
         if not self.uart.any():

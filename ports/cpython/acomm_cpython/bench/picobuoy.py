@@ -268,7 +268,13 @@ class Run:
 
         # 4. out of its store, never sent again
         r["drained"] = mt.wait_for(self._settled, 180) is not None
-        time.sleep(2)  # a late duplicate would show here
+        # a late duplicate would show here; the buoy is idle meanwhile (the
+        # diver off, its packet gone): the share of that time its core ran,
+        # not in WFI/WFE (the runner's sleep_ms)
+        s0 = buoy.stats()
+        time.sleep(5)
+        s1 = buoy.stats()
+        r["idle_cpu_percent"] = 100.0 * (1 - (s1["sleep_ms"] - s0["sleep_ms"]) / (s1["sim_ms"] - s0["sim_ms"]))
         # the reset fell between the session's command and its result
         r["reset_in_session"] = self.session_at < self.reset_at < (self.result_at or 0)
         r["buoy_stats"] = buoy.stats()

@@ -24,6 +24,9 @@
 #                                  `acomm flash` installs it, nothing else
 #   rp2040_buoy_heap_free_after_reset_bytes   the same after the power
 #                                  cycle, its store holding the diver's packet
+#   rp2040_buoy_idle_cpu_percent   the buoy's CPU duty while idle (5 s once
+#                                  its packet is gone): simulated time its core
+#                                  ran rather than slept in WFI/WFE, in %
 #
 # ACOMM_BOARD_RUN=FILE also writes the whole run (what shore received, the
 # buoy's store records, the Iridium sessions, the consoles) to FILE as JSON,
@@ -72,3 +75,4 @@ def run(emit, quick=False):
         raise RuntimeError("the buoy's ready lines give no free heap: %r" % r["buoy_console"][-6:])
     emit("rp2040_buoy_heap_free_bytes", free[0], "bytes")
     emit("rp2040_buoy_heap_free_after_reset_bytes", free[1], "bytes")
+    emit("rp2040_buoy_idle_cpu_percent", round(r["idle_cpu_percent"], 1), "%")
