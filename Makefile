@@ -56,9 +56,9 @@ rp2040-emulator:
 # Every runtime runs and prints its own closing line: pytest on CPython,
 # the core suite on the MicroPython unix port, on the Cortex-M3 firmware
 # under qemu, on the i386 build and on the RP2040 firmware in its
-# emulator. The target fails if any fails. tools/testall.py builds the
-# firmware first, then starts them side by side by priority (why and how:
-# its header). tools/browser.py installs Debian's chromium for the
+# emulator. The target fails if any fails. tools/testall.py starts them
+# side by side by priority, each as soon as what it needs is built (why
+# and how: its header). tools/browser.py installs Debian's chromium for the
 # console's browser test when it is missing and this runs as root (else
 # the test skips). When the firmware cannot be built on this machine (exit
 # 3), its three runtimes are skipped with one line saying how to enable
