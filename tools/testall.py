@@ -15,13 +15,15 @@
 # real-time ptys and sockets). One after the other on two cores they took
 # 2,262 s on a slow 2-core machine and 2,378 s in CI, with a core idle for
 # minutes, so they start together, by priority:
-#   - the emulated boards' pytest at normal priority: a board there keeps
-#     real time only with the CPU it needs (its Iridium session missed its
-#     window once beside the MAVLink bridges' real-time tests);
-#   - the other pytest, then the i386 build, at nice 10: their real-time
-#     tests have generous bounds. The unix port's suite needs no firmware:
-#     it starts with the build, at nice 10, and soaks up what the build's
-#     single-threaded steps (cmake, links) leave;
+#   - both pytests at normal priority: a board there keeps real time only
+#     with the CPU it needs (its Iridium session missed its window once
+#     beside the MAVLink bridges' real-time tests), and so do the other's
+#     drivers and emulators on ptys (at nice 10 beside the emulated boards,
+#     whose runner and ocean take a core each, they starved: a SeaTrac ping
+#     and an Iridium mailbox check on ptys ran out of their time);
+#   - the i386 build's suite at nice 10. The unix port's suite needs no
+#     firmware: it starts with the build, at nice 10, and soaks up what the
+#     build's single-threaded steps (cmake, links) leave;
 #   - the Cortex-M3's core tests at nice 15 and the RP2040's at nice 19:
 #     they keep simulated time (each test has minutes of limit) and take the
 #     CPU the others leave, all of it once those end. They should end
@@ -129,7 +131,7 @@ def main(argv=None):
         rp2040 = Job("micropython-rp2040", [PY, "tools/board_runtests.py", "--target", "rp2040"],
                      "rp2040-tests.log", nice=19)
     failed = []
-    if run("pytest", [PY, "-m", "pytest", "-q", "tests"] + ["--ignore=" + t for t in EMULATOR_TESTS], nice=10):
+    if run("pytest", [PY, "-m", "pytest", "-q", "tests"] + ["--ignore=" + t for t in EMULATOR_TESTS]):
         failed.append("pytest")
     if unix.finish():
         failed.append("micropython")
