@@ -357,7 +357,7 @@ def build_qemu(tree, name, parts, k=None):
     shutil.copyfile(os.path.join(work, "build", "firmware.elf"), os.path.join(OUT, name + ".elf"))
 
 
-def build_unix32(tree, name, parts):
+def build_unix32(tree, name, parts, k=None):
     work, args = _make_common(tree, name, parts)
     cmd = ["make", "-C", os.path.join(tree, "ports", "unix"), "-j" + JOBS, "VARIANT=standard",
            "CFLAGS_EXTRA=-m32", "LDFLAGS_EXTRA=-m32", "MPY_CROSS_FLAGS=-march=x86",
@@ -368,7 +368,7 @@ def build_unix32(tree, name, parts):
     os.chmod(os.path.join(OUT, name), 0o755)
 
 
-def build_rp2(tree, name, parts):
+def build_rp2(tree, name, parts, k=None):
     # One CMake build folder serves every rp2 product: the C objects are the
     # same, so after the first product only the frozen code is compiled
     # again (makemanifest.py keeps frozen_content.c while its inputs are
@@ -404,6 +404,8 @@ def build_rp2(tree, name, parts):
     os.replace(_out(name) + ".tmp", _out(name))
 
 
+# each is called (tree, name, parts, k): k, this build's key, lets a qemu
+# product start from a sibling's folder (the rp2 products share one anyway)
 BUILDERS = {"qemu": build_qemu, "unix": build_unix32, "rp2": build_rp2}
 
 
@@ -427,10 +429,7 @@ def build(only=None, install=True):
         if _fresh(name, k):
             continue
         say("building %s" % name)
-        if port == "qemu":
-            build_qemu(tree, name, parts, k)
-        else:
-            BUILDERS[port](tree, name, parts)
+        BUILDERS[port](tree, name, parts, k)
         with open(os.path.join(OUT, name + ".key"), "w") as f:
             f.write(k)
     return OUT

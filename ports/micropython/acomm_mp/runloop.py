@@ -8,11 +8,10 @@
 # An idle node is stepped every idle_ms only. Stepped every 10 ms, the
 # idle buoy's RP2040 ran 37 % of the time (the emulator's sleep_ms: about
 # 3.7 ms a pass); stepped every 100 ms, 7.6 %. Asking its UARTs whether
-# bytes wait costs little. So poll() ticks when
-# bytes wait on a UART, when the last step moved bytes (a command answered,
-# a frame half written), or when idle_ms have passed since it last ran
-# (the timers: retries, adverts, lifespans, gc); otherwise it only feeds
-# the watchdog. Acoustic and satellite timers are seconds long: 100 ms
+# bytes wait costs little. So poll() ticks when bytes wait on a UART, when
+# the last step moved bytes (a command answered, a frame half written), or
+# when idle_ms have passed since it last ran (the timers: retries, adverts,
+# lifespans, gc); otherwise it only feeds the watchdog. Acoustic and satellite timers are seconds long: 100 ms
 # late is nothing to them, and input is still taken within step_ms.
 #
 # run_blocking() is what acomm_mp.start runs on a board: a plain loop that
@@ -35,9 +34,10 @@ class Board:
         self.wdt = None
         self._gc_due = None
         self.stats = {"ticks": 0, "errors": 0, "oom": 0, "gc": 0, "rests": 0}
-        # the UARTs (links, GPS) whose any() poll() asks; a stream without
-        # any() makes every poll a tick
-        self._streams = streams
+        # the any() of each UART (links, GPS) poll() asks, bound once (a
+        # bound method made per pass is an allocation every step_ms); None
+        # for a stream without one, which makes every poll a tick
+        self._waiting = [getattr(s, "any", None) for s in streams]
         self._last = None  # when the node last stepped
         self._busy = True  # whether that step moved bytes
         self._reported = []  # exception types already reported (at most 8)
@@ -48,8 +48,7 @@ class Board:
         if self._busy or ticks_diff(now, self._last) >= self.cfg["idle_ms"]:
             self.tick(now)
             return
-        for s in self._streams:
-            a = getattr(s, "any", None)
+        for a in self._waiting:
             if a is None or a():
                 self.tick(now)
                 return

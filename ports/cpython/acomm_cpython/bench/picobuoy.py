@@ -277,7 +277,7 @@ class Run:
         r["idle_cpu_percent"] = 100.0 * (1 - (s1["sleep_ms"] - s0["sleep_ms"]) / (s1["sim_ms"] - s0["sim_ms"]))
         # the reset fell between the session's command and its result
         r["reset_in_session"] = self.session_at < self.reset_at < (self.result_at or 0)
-        r["buoy_stats"] = buoy.stats()
+        r["buoy_stats"] = s1
         say("done" if r["drained"] else "the buoy did not finish the packet")
         # the store as a user reads it: Ctrl-C stops main.py (the watchdog then
         # resets the board 8 s later, long after the copy)
