@@ -128,8 +128,8 @@ class DatagramDriver(SansIO):
     # -- the endpoint table ------------------------------------------------------
     def set_peer(self, node_id, endpoint):
         # A static entry (configuration): never displaced or forgotten.
-        if not 0 <= node_id <= fr.MAX_ADDR:
-            raise EncodeError("node id %d outside 0..%d" % (node_id, fr.MAX_ADDR))
+        if not fr.is_addr(node_id):
+            raise EncodeError("node id %d is not a node id" % node_id)
         self._static[node_id] = endpoint
         self._learned.pop(node_id, None)
 

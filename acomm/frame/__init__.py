@@ -4,14 +4,20 @@
 #
 # raw     for links that carry no addressing or integrity of their own (UDP,
 #         transparent serial radios). Header of 3 bytes when both addresses fit
-#         in 4 bits (networks of up to 16 nodes), 4 bytes otherwise (up to 255
-#         nodes), then the payload, then CRC-16/ARC big-endian over everything
+#         in 4 bits (networks of up to 16 nodes), 4 to 8 bytes otherwise (ids
+#         up to 65534, below), then the payload, then CRC-16/ARC big-endian over everything
 #         before it. Length comes from the container (datagram, serial framing).
 #
 #           byte 0  VV W TTT FF     V version (1), W wide addresses, T type,
 #           byte 1  FF SSSSSS       F flags (4 bits split), S sequence (0..63)
 #           short:  byte 2 = DDDD SSSS (destination, source)
-#           wide:   byte 2 = destination, byte 3 = source
+#           wide:   destination, then source, each a node id on the water
+#
+#         A node id on the water (put_addr / get_addr, here and in every
+#         layer above that names a node) is one byte for 0..254, and for
+#         256..65534 the byte 0xFF then the id in 2 bytes: 255 is the API's
+#         broadcast, never a node, so that byte was free and every encoding
+#         of the one-byte ids stays as it was.
 #
 #         A node never addresses itself, so destination == source on the wire
 #         means broadcast; this keeps all 16 short addresses usable by nodes.
@@ -44,14 +50,17 @@ F_COMPRESSED = const(2)
 F_AUTH = const(1)
 
 BROADCAST = const(255)  # API value; see the header comment for the encoding
-MAX_ADDR = const(254)  # node addresses are 0..254
+MAX_ADDR = const(65534)  # node ids are 0..254 and 256..65534 (255 is BROADCAST)
+NARROW_MAX_ADDR = const(254)  # the ids that take one byte on the water
 _SHORT_MAX_ADDR = const(15)
+_ESC = const(0xFF)
 
 SEQ_MOD_RAW = const(64)
 SEQ_MOD_ELIDED = const(16)
 
 RAW_OVERHEAD_SHORT = const(5)  # 3 header + 2 CRC
-RAW_OVERHEAD_WIDE = const(6)
+RAW_OVERHEAD_WIDE = const(6)  # with two one-byte ids
+RAW_OVERHEAD_MAX = const(10)  # with two ids of 256 or more
 ELIDED_OVERHEAD = const(1)  # 2 when flags are set
 
 _X_FLAGS = const(0x80)
@@ -101,40 +110,85 @@ def _check_common(ftype, seq, flags, seq_mod):
         raise EncodeError("sequence %d outside 0..%d" % (seq, seq_mod - 1))
 
 
+def is_addr(a):
+    """Whether a is a node id: 0..254 or 256..65534 (255 is BROADCAST)."""
+    return 0 <= a <= MAX_ADDR and a != BROADCAST
+
+
+def addr_size(a):
+    """Bytes node id a takes on the water: 1 for 0..254, else 3."""
+    return 1 if a < BROADCAST else 3
+
+
+def put_addr(buf, i, a):
+    """Writes node id a into the bytearray buf at i (caller checked is_addr
+    and the room); returns the index after it."""
+    if a < BROADCAST:
+        buf[i] = a
+        return i + 1
+    buf[i] = _ESC
+    buf[i + 1] = a >> 8
+    buf[i + 2] = a & 0xFF
+    return i + 3
+
+
+def addr_bytes(a):
+    """Node id a as it goes on the water (see put_addr)."""
+    return bytes((a,)) if a < BROADCAST else bytes((_ESC, a >> 8, a & 0xFF))
+
+
+def get_addr(data, i, end=-1):
+    """-> (node id, index after it) read from data at i, before end (len(data)
+    by default). DecodeError when it is cut short, or an escaped id is one a
+    single byte writes (so each id has one encoding) or 65535."""
+    if end < 0:
+        end = len(data)
+    if i >= end:
+        raise DecodeError("node id missing")
+    a = data[i]
+    if a != _ESC:
+        return a, i + 1
+    if i + 3 > end:
+        raise DecodeError("node id cut short")
+    a = (data[i + 1] << 8) | data[i + 2]
+    if a <= BROADCAST or a > MAX_ADDR:
+        raise DecodeError("escaped node id %d" % a)
+    return a, i + 3
+
+
 def _wire_dst(src, dst):
-    if not 0 <= src <= MAX_ADDR:
-        raise EncodeError("source address %d outside 0..%d" % (src, MAX_ADDR))
+    if not is_addr(src):
+        raise EncodeError("source address %d is not a node id" % src)
     if dst == BROADCAST:
         return src
-    if not 0 <= dst <= MAX_ADDR:
-        raise EncodeError("destination address %d outside 0..%d" % (dst, MAX_ADDR))
+    if not is_addr(dst):
+        raise EncodeError("destination address %d is not a node id" % dst)
     if dst == src:
         raise EncodeError("node %d cannot address itself" % src)
     return dst
 
 
 def raw_overhead(src, dst):
-    # Bytes a raw frame adds to its payload between these two nodes.
+    """Bytes a raw frame adds to its payload between these two nodes."""
     if src <= _SHORT_MAX_ADDR and (dst <= _SHORT_MAX_ADDR or dst == BROADCAST):
         return RAW_OVERHEAD_SHORT
-    return RAW_OVERHEAD_WIDE
+    return 4 + addr_size(src) + addr_size(src if dst == BROADCAST else dst)  # broadcast: dst == src
 
 
 def encode_raw_into(buf, ftype, src, dst, seq, payload, flags=0):
-    # Writes the raw frame into buf (a bytearray) and returns its length.
-    # Does not allocate when payload is a bytes-like object.
+    """Writes the raw frame into buf (a bytearray) and returns its length.
+    Does not allocate when payload is a bytes-like object."""
     _check_common(ftype, seq, flags, SEQ_MOD_RAW)
     wdst = _wire_dst(src, dst)
     wide = src > _SHORT_MAX_ADDR or wdst > _SHORT_MAX_ADDR
-    hlen = 4 if wide else 3
+    hlen = 2 + addr_size(wdst) + addr_size(src) if wide else 3
     n = hlen + len(payload)
     if n + 2 > len(buf):
         raise EncodeError("frame of %d bytes does not fit buffer of %d" % (n + 2, len(buf)))
     buf[0] = (VERSION << 6) | (0x20 if wide else 0) | (ftype << 2) | (flags >> 2)
     buf[1] = ((flags & 3) << 6) | seq
     if wide:
-        buf[2] = wdst
-        buf[3] = src
+        put_addr(buf, put_addr(buf, 2, wdst), src)
     else:
         buf[2] = (wdst << 4) | src
     buf[hlen:n] = payload
@@ -145,63 +199,63 @@ def encode_raw_into(buf, ftype, src, dst, seq, payload, flags=0):
 
 
 def encode_raw(frame):
-    buf = bytearray(len(frame.payload) + RAW_OVERHEAD_WIDE)
+    """The raw frame's bytes (see encode_raw_into)."""
+    buf = bytearray(len(frame.payload) + RAW_OVERHEAD_MAX)
     n = encode_raw_into(buf, frame.ftype, frame.src, frame.dst, frame.seq, frame.payload, frame.flags)
     return bytes(buf[:n])
 
 
+def _header(data):
+    # -> (source, wire destination, header length) of a raw frame whose
+    # length and version check_raw has seen; the addresses end before the CRC
+    if not data[0] & 0x20:
+        return data[2] & 0x0F, data[2] >> 4, 3
+    end = len(data) - 2
+    wdst, i = get_addr(data, 2, end)
+    src, i = get_addr(data, i, end)
+    if wdst <= _SHORT_MAX_ADDR and src <= _SHORT_MAX_ADDR:
+        # the encoder always uses the short form for these; a wide one is
+        # not ours (and would give two encodings for one frame)
+        raise DecodeError("wide header for short addresses")
+    return src, wdst, i
+
+
 def check_raw(data):
-    # Validates version, length and CRC of a raw frame without building a
-    # Frame; returns the header length. Raises DecodeError / CRCError.
+    """Validates version, length, addresses and CRC of a raw frame without
+    building a Frame; returns the header length. Raises DecodeError / CRCError."""
+    return _checked(data)[2]
+
+
+def _checked(data):
+    # check_raw's checks; -> _header(data)
     n = len(data)
     if n < RAW_OVERHEAD_SHORT:
         raise DecodeError("raw frame of %d bytes is shorter than the minimum 5" % n)
     b0 = data[0]
     if b0 >> 6 != VERSION:
         raise DecodeError("unsupported frame version %d" % (b0 >> 6))
-    hlen = 4 if b0 & 0x20 else 3
-    if n < hlen + 2:
+    if b0 & 0x20 and n < RAW_OVERHEAD_WIDE:
         raise DecodeError("wide raw frame of %d bytes is shorter than the minimum 6" % n)
-    mv = memoryview(data)
     want = (data[n - 2] << 8) | data[n - 1]
-    got = crc16(mv[: n - 2])
+    got = crc16(memoryview(data)[: n - 2])
     if want != got:
         raise CRCError("frame CRC 0x%04x does not match computed 0x%04x" % (want, got))
-    return hlen
+    return _header(data)
 
 
 def raw_addresses(data):
-    # (source, destination) node ids of a raw frame, destination BROADCAST
-    # for a broadcast, after check_raw's checks and without copying the
-    # payload: the IP links route and learn senders by them.
-    hlen = check_raw(data)
-    if hlen == 4:
-        wdst = data[2]
-        src = data[3]
-        if src > MAX_ADDR or wdst > MAX_ADDR:
-            raise DecodeError("reserved address 255 in frame header")
-    else:
-        wdst = data[2] >> 4
-        src = data[2] & 0x0F
+    """(source, destination) node ids of a raw frame, destination BROADCAST
+    for a broadcast, after check_raw's checks and without copying the
+    payload: the IP links route and learn senders by them."""
+    src, wdst, _ = _checked(data)
     return src, (BROADCAST if wdst == src else wdst)
 
 
 def decode_raw(data):
-    hlen = check_raw(data)
+    """The Frame in raw bytes. Raises DecodeError / CRCError."""
+    src, wdst, hlen = _checked(data)
     b0 = data[0]
     b1 = data[1]
-    if hlen == 4:
-        wdst = data[2]
-        src = data[3]
-        if src > MAX_ADDR or wdst > MAX_ADDR:
-            raise DecodeError("reserved address 255 in frame header")
-        if wdst <= _SHORT_MAX_ADDR and src <= _SHORT_MAX_ADDR:
-            # the encoder always uses the short form for these; a wide one is
-            # not ours (and would give two encodings for one frame)
-            raise DecodeError("wide header for short addresses")
-    else:
-        wdst = data[2] >> 4
-        src = data[2] & 0x0F
     dst = BROADCAST if wdst == src else wdst
     flags = ((b0 & 3) << 2) | (b1 >> 6)
     return Frame((b0 >> 2) & 7, src, dst, b1 & 0x3F, bytes(data[hlen : len(data) - 2]), flags)

@@ -678,10 +678,11 @@ class Link:
             self._pending_acks.append((src, f.seq, f.ctr))
         # senders number frames per destination (_next_seq), and modem
         # replies and broadcasts on one more counter: one filter key each
+        # (node ids are at most 65534: one key per pair and kind)
         if f.ftype == fr.REPLY:
-            key = src * 257 + 256
+            key = src * 65537 + 65536
         else:
-            key = src * 257 + (255 if dst is None else dst)
+            key = src * 65537 + (255 if dst is None else dst)
         if self._dups.seen(key, f.seq, now):
             self.stats["rx_duplicates"] += 1
             return

@@ -3,12 +3,14 @@
 # heard refreshes its source; a node not heard for `lost_after` of its own
 # advert periods becomes unavailable.
 #
-# Advert payload, 2 bytes: node id (0..254), then the sender's advert period
-# in units of 4 s (1..255, so up to 17 minutes), which tells listeners how
-# long silence may last before the node counts as lost.
+# Advert payload, 2 bytes: node id (0..254; 256..65534 take 3 bytes, as in
+# acomm.frame's put_addr), then the sender's advert period in units of 4 s
+# (1..255, so up to 17 minutes), which tells listeners how long silence may
+# last before the node counts as lost.
 
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
+from ..frame import addr_bytes, get_addr
 from ..prng import Prng
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
@@ -17,27 +19,28 @@ _AVAILABLE = const(1)
 _UNAVAILABLE = const(2)
 _UNKNOWN = const(0)
 
-_ADVERT_LEN = const(2)
 _PERIOD_UNIT_MS = const(4000)
 
 
 def encode_advert(node_id, period_ms):
+    """The advert's bytes: node_id (a node id, see acomm.frame), then
+    period_ms in 4 s units, 1..255."""
     units = (period_ms + _PERIOD_UNIT_MS - 1) // _PERIOD_UNIT_MS
     if units < 1:
         units = 1
     elif units > 255:
         units = 255
-    return bytes((node_id, units))
+    return addr_bytes(node_id) + bytes((units,))
 
 
 def decode_advert(data):
-    if len(data) != _ADVERT_LEN:
-        raise DecodeError("advert of %d bytes, expected %d" % (len(data), _ADVERT_LEN))
-    if data[0] > 254:
-        raise DecodeError("advert from reserved node id 255")
-    if data[1] == 0:
+    """-> (node id, period in ms). Raises DecodeError."""
+    node_id, i = get_addr(data, 0)
+    if len(data) != i + 1:
+        raise DecodeError("advert of %d bytes, expected %d" % (len(data), i + 1))
+    if data[i] == 0:
         raise DecodeError("advert with zero period")
-    return data[0], data[1] * _PERIOD_UNIT_MS
+    return node_id, data[i] * _PERIOD_UNIT_MS
 
 
 class Discovery:

@@ -46,7 +46,9 @@ class LinkFraming:
         if elided:
             self.worst_overhead = fr.ELIDED_OVERHEAD + (1 if link_acks else 0)
         else:
-            self.worst_overhead = fr.RAW_OVERHEAD_WIDE
+            # to any one-byte id (a peer of 256 or more costs 2 bytes more:
+            # mtu_for is exact per peer, and the transport sizes by it)
+            self.worst_overhead = fr.raw_overhead(node_id, 254)
         if fec:
             from ..codec.fec import ReedSolomon
 
@@ -55,7 +57,7 @@ class LinkFraming:
             mtu = min(mtu, 255)
         self.fec = fec
         self._mtu = mtu
-        self._buf = bytearray(mtu + fr.RAW_OVERHEAD_WIDE)
+        self._buf = bytearray(mtu + fr.RAW_OVERHEAD_MAX)
         self._plain_overhead = self.worst_overhead
 
     def set_auth(self, auth):

@@ -1,7 +1,8 @@
 # The name table: canonical system names <-> node ids <-> interface addresses.
 #
 # A node has a canonical name (a string, as in seed 000) and a network-wide
-# node id (0..254, what acomm's raw frame header and adverts carry). Each
+# node id (0..254 and 256..65534, what acomm's raw frame header and adverts
+# carry; 255 is broadcast). Each
 # interface may address nodes differently (a Micro-Modem knows 1..15, an
 # Iridium modem an IMEI), so each link keeps its own id <-> address map.
 # Entries come from static configuration and from adverts heard on the links.
@@ -18,8 +19,8 @@ class NameTable:
         self._by_id = {}
 
     def add(self, name, node_id):
-        if not 0 <= node_id <= 254:
-            raise AcommError("node id %d outside 0..254" % node_id)
+        if not 0 <= node_id <= 65534 or node_id == 255:
+            raise AcommError("node id %d is not 0..254 or 256..65534" % node_id)
         old = self._by_id.get(node_id)
         if old is not None and old != name:
             del self._by_name[old]

@@ -63,7 +63,7 @@ def _ewma(avg, sample):
 
 class Neighbours:
     """The neighbours heard on one link with an ETX each (see the module's notes). Bounded by
-    capacity; ids are 0..254. Times are ticks (ms)."""
+    capacity; ids are node ids (0..254, 256..65534). Times are ticks (ms)."""
 
     def __init__(self, capacity=32, max_age_ms=600000, keep_ms=60000):
         self.capacity = capacity
@@ -73,8 +73,8 @@ class Neighbours:
         self.refused = 0  # newcomers refused for want of room
 
     def _entry(self, now, node_id):
-        if not 0 <= node_id <= 254:
-            raise AcommError("neighbour id %r outside 0..254" % (node_id,))
+        if not 0 <= node_id <= 65534 or node_id == 255:
+            raise AcommError("neighbour id %r is not a node id" % (node_id,))
         e = self.table.get(node_id)
         if e is not None:
             return e

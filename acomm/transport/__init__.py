@@ -51,6 +51,7 @@ from . import segment as sg
 from .arq import Outgoing, Reassembly
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, StoreFull
+from ..frame import addr_bytes
 from .packetstore import PacketStore, key_of
 from .route import MEDIUM_ALL, Router
 
@@ -102,14 +103,14 @@ class _Packet:
     # With the defaults a packet waiting in the store sets 8 (chunks too):
     # 64 B of table, where 12 took 96, on every packet a buoy holds while
     # its uplink is down.
-    out = link = hop = timer = polled = wait = group = body = medium = None
+    out = link = hop = timer = polled = wait = group = body = medium = key = None  # key: the store's, origins from 256
     inflight = polling = misses = chunks = 0
     compressed = relayed = False
 
 
 # every field, for a copy of a packet (MEDIUM_ALL)
 _FIELDS = ("origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link", "hop",
-           "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks", "size")
+           "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks", "size", "key")
 
 
 def _wall_default():
@@ -119,6 +120,7 @@ def _wall_default():
 
 
 class Transport:
+    _done_wide = None  # _memory(): made by the first origin of 256 or more
     def __init__(self, node_id, names, links, next_id, emit, store=None, routes=None, wall=None, max_packet=65536,
                  compress=True, urgent=4, routing=None):
         """node_id: this node's id; names: its acomm.link.names.NameTable; links: name -> Link (read
@@ -290,7 +292,11 @@ class Transport:
             self._resumed = True
             p = self._packet(s.origin, s.final, s.pid, s.prio, s.expiry, None, s.compressed, s.medium)
             p.chunks, p.size = s.chunks, s.size
+            if s.origin > 254:
+                p.key = s.key
             self._queue(p)
+        if self.packets.done_wide:
+            self._done_wide = bytearray(self.packets.done_wide[-7 * _DONE_MEMORY :])
         d = self._done = bytearray(self.packets.done[-5 * _DONE_MEMORY :])
         for i in range(0, len(d), 5):
             if d[i + 3] == 0xFF and d[i + 4] == 0xFF:
@@ -730,7 +736,7 @@ class Transport:
         if h.relay is None or h.relay[1] == self.node_id:
             return True  # for this node: delivered, never stored
         q = _Packet()  # not yet whole: what the store's overflow rule judges
-        q.size, q.prio, q.medium = h.length, h.relay[2], None
+        q.size, q.prio, q.medium, q.origin, q.final = h.length, h.relay[2], None, h.relay[0], h.relay[1]
         if self.packets.room(q):
             return True
         self.stats["store_full"] += 1
@@ -801,13 +807,21 @@ class Transport:
         r.header = None
         return True
 
+    def _memory(self, origin, pid):
+        # -> (the entries for origin's packets, an entry's size, the start of
+        # pid's): 5 bytes each, origins of 256 or more 7 (the origin in 3)
+        if origin < 255:
+            return self._done, 5, bytes((origin, pid >> 8, pid & 0xFF))
+        if self._done_wide is None:
+            self._done_wide = bytearray()
+        return self._done_wide, 7, addr_bytes(origin) + bytes((pid >> 8, pid & 0xFF))
+
     def _is_done(self, origin, pid):
         # whether (origin, pid) is among the entries remembered: a hit must
         # start on an entry's boundary (the pattern can straddle two)
-        d = self._done
-        pat = bytes((origin, pid >> 8, pid & 0xFF))
+        d, w, pat = self._memory(origin, pid)
         i = d.find(pat)
-        while i >= 0 and i % 5:
+        while i >= 0 and i % w:
             i = d.find(pat, i + 1)
         return i >= 0
 
@@ -818,27 +832,28 @@ class Transport:
         # soonest: an expired one first (its copies are gone, relays drop
         # them), else the earliest, counted as done_forgotten (a copy of
         # it could then be delivered twice)
-        d = self._done
+        d, w, pat = self._memory(origin, pid)
         now_min = self.wall() // 60
-        if len(d) >= 5 * _DONE_MEMORY:
+        if len(d) >= w * _DONE_MEMORY:
             j = 0
             least = 0x10000
-            for i in range(0, len(d), 5):
-                left = (((d[i + 3] << 8) | d[i + 4]) - now_min) & 0xFFFF
+            for i in range(w - 2, len(d), w):
+                left = (((d[i] << 8) | d[i + 1]) - now_min) & 0xFFFF
                 left = left - 0x10000 if left & 0x8000 else left  # minutes still to run, wrap-safe
                 if left < least:
-                    j, least = i, left
+                    j, least = i + 2 - w, left
             if least > 0:
                 self.stats["done_forgotten"] += 1
-            d[j : j + 5] = b""
+            d[j : j + w] = b""
         until = (now_min + (max(0, life_s) + 59) // 60 + 1) & 0xFFFF
-        d.extend(bytes((origin, pid >> 8, pid & 0xFF, until >> 8, until & 0xFF)))
+        d.extend(pat)
+        d.extend(bytes((until >> 8, until & 0xFF)))
         if save:
             self._save_done()
 
     def _save_done(self):
         try:
-            self.packets.save_done(self._done)
+            self.packets.save_done(self._done, self._done_wide)
         except AcommError:  # StoreFull or another StoreError; its room is kept; a store that still says no costs only the memory
             self.stats["store_full"] += 1
 

@@ -36,6 +36,7 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, EncodeError
+from ..frame import addr_bytes, get_addr
 from ..prng import Prng
 
 BROADCAST = const(255)
@@ -50,21 +51,26 @@ MAX_HOPS = const(63)  # acomm.transport.routing.MAX_HOPS
 
 
 def encode_flood(origin, mid, hops, data):
-    """A flood message: origin 0..254, its id 0..255, hops 0..63, then 1..MAX_DATA bytes of data."""
+    """A flood message: origin (a node id: 0..254 in one byte, 256..65534 in three), its id
+    0..255, hops 0..63, then 1..MAX_DATA bytes of data."""
     if not isinstance(data, (bytes, bytearray, memoryview)) or not 1 <= len(data) <= MAX_DATA:
         raise EncodeError("flood data must be 1..%d bytes" % MAX_DATA)
-    for v, top, what in ((hops, MAX_HOPS, "count"), (origin, 254, "origin"), (mid, 255, "flood id")):
-        if not isinstance(v, int) or not 0 <= v <= top:
+    for v, top, what in ((hops, MAX_HOPS, "count"), (origin, 65534, "origin"), (mid, 255, "flood id")):
+        if not isinstance(v, int) or not 0 <= v <= top or (v == 255 and top == 65534):
             raise EncodeError("%s %r outside 0..%d" % (what, v, top))
-    return bytes((hops, origin, mid)) + bytes(data)  # kind 0: the top bits of hops stay clear
+    # kind 0: the top bits of hops stay clear
+    return bytes((hops,)) + addr_bytes(origin) + bytes((mid,)) + bytes(data)
 
 
 def decode_flood(data):
     """A flood message (kind 0) -> ("flood", origin, id, hops, data); DecodeError for a wrong
     length or the broadcast id as its origin."""
-    if not 4 <= len(data) <= 3 + MAX_DATA or data[0] >> 6 or data[1] > 254:
-        raise DecodeError("flood of %d bytes or from a reserved id" % len(data))
-    return ("flood", data[1], data[2], data[0], bytes(data[3:]))
+    if not data or data[0] >> 6:
+        raise DecodeError("not a flood")
+    origin, i = get_addr(data, 1)
+    if not i + 2 <= len(data) <= i + 1 + MAX_DATA:
+        raise DecodeError("flood of %d bytes" % len(data))
+    return ("flood", origin, data[i], data[0], bytes(data[i + 1 :]))
 
 
 class Flooder:

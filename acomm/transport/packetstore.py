@@ -3,12 +3,15 @@
 #
 # A packet is one or more records. Chunk 0 holds the header and the start
 # of the body; chunks 1..n-1 the rest, each at most the store's max_record.
-# Key of chunk i: i << 24 | origin << 16 | pid. put() writes chunks 1..n-1
+# Key of chunk i: i << 24 | origin << 16 | pid; for an origin of 256 or more
+# (which does not fit the key), i << 24 | 0xFF << 16 | a slot that put()
+# finds free (no one-byte origin is 255). put() writes chunks 1..n-1
 # first and chunk 0 last, delete() removes chunk 0 first: a packet exists
 # exactly when its chunk 0 does, and recovery deletes chunks left without
 # one (a cut in the middle of a put or a delete).
 #
-# Chunk 0 header, 11 bytes: origin, final destination, pid (2, big-endian),
+# Chunk 0 header, 11 bytes: origin, final destination (node ids, 3 bytes
+# each from 256 up, as acomm.frame.put_addr writes them), pid (2, big-endian),
 # priority, flags (bit 0: body compressed; bit 1: a medium name follows),
 # expiry (4, wall-clock seconds, big-endian), chunk count; then the medium
 # (a length byte and the name) when flagged; then body bytes.
@@ -23,6 +26,8 @@
 # (origin, pid) pairs, 3 bytes each, rewritten at every delivery: a
 # receiver that lost power between delivering a packet and its sender
 # hearing the SACK would otherwise deliver the resent packet a second time.
+# 0xFFFFFD holds them with the minute their copies stop (5 bytes each), and
+# 0xFFFFFC those from origins of 256 or more (7 bytes: the origin in 3).
 #
 # Overflow rule: a store with a capacity keeps its last quarter for urgent
 # packets (priority <= urgent). A packet that does not fit is refused when
@@ -33,11 +38,14 @@
 
 from ..compat import const
 from .. import errors  # one name in this module's dict, not two (the buoy's heap)
+from ..frame import addr_bytes, get_addr
 
 _HDR = const(11)
 _META = const(0xFFFFFF)
 _DONE = const(0xFFFFFE)  # before 5-byte entries: (origin, pid) only, read once and converted
 _DONE5 = const(0xFFFFFD)
+_DONE7 = const(0xFFFFFC)
+_WIDE_KEYS = const(0xFF0000)  # chunk 0 keys of packets from origins of 256 or more: slots 0..0xFFFB
 DONE_MEMORY = const(32)
 _PID_BLOCK = const(32)
 _REC_OVERHEAD = const(12)  # acomm.transport.store's record header and CRC
@@ -52,8 +60,9 @@ _META_ROOM = const(2 * (_REC_OVERHEAD + 2) + 2 * (_REC_OVERHEAD + 5 * DONE_MEMOR
 
 
 def key_of(p):
-    """The key of chunk 0 of packet p (origin and pid) in the store."""
-    return (p.origin << 16) | p.pid
+    """The key of chunk 0 of packet p in the store: its origin and pid, or for an origin of
+    256 or more the slot put() found (p.key)."""
+    return (p.origin << 16) | p.pid if p.origin < 255 else p.key
 
 
 class Stored:
@@ -119,10 +128,11 @@ class PacketStore:
         self.pid = 0
         self._limit = 0  # ids up to here are covered by the stored limit
         self.done = b""  # what recover() found: 5 bytes an entry (origin, pid, until minute), see save_done
+        self.done_wide = b""  # the same for origins of 256 or more, 7 bytes an entry
 
     def _sizes(self, p):
         # p.size: the body's length (the body itself may be in the store only)
-        n = _HDR + (1 + len(p.medium) if p.medium else 0) + p.size
+        n = _HDR + (1 + len(p.medium) if p.medium else 0) + p.size + (2 if p.origin > 254 else 0) + (2 if p.final > 254 else 0)
         return n, (n + self.chunk - 1) // self.chunk
 
     def room(self, p, urgent=None):
@@ -147,10 +157,13 @@ class PacketStore:
         self.pid = pid
         return pid
 
-    def save_done(self, done):
+    def save_done(self, done, wide=None):
         # done: the packets done here, 5 bytes each (origin, pid high, pid
-        # low, until minute high, low), at most DONE_MEMORY of them
+        # low, until minute high, low), at most DONE_MEMORY of them; wide:
+        # those from origins of 256 or more, 7 bytes each (the origin in 3)
         self.store.put(_DONE5, bytes(done))  # the room for it is kept (_META_ROOM)
+        if wide:
+            self.store.put(_DONE7, bytes(wide))  # its room is not kept: a node of such a network has a larger store
 
     def put(self, p):
         # raises StoreFull (nothing of the packet stays then)
@@ -162,8 +175,16 @@ class PacketStore:
         p.chunks = chunks
         flags = (_F_COMPRESSED if p.compressed else 0) | (_F_MEDIUM if p.medium else 0)
         e = p.expiry & 0xFFFFFFFF
-        head = bytes((p.origin, p.final, p.pid >> 8, p.pid & 0xFF, p.prio, flags, e >> 24, (e >> 16) & 0xFF,
-                      (e >> 8) & 0xFF, e & 0xFF, chunks))
+        head = bytes((p.pid >> 8, p.pid & 0xFF, p.prio, flags, e >> 24, (e >> 16) & 0xFF, (e >> 8) & 0xFF, e & 0xFF, chunks))
+        if p.origin < 255 and p.final < 255:
+            head = bytes((p.origin, p.final)) + head
+        else:
+            head = addr_bytes(p.origin) + addr_bytes(p.final) + head
+            if p.origin > 254 and p.key is None:
+                s = p.pid % 0xFFFC
+                while self.store.length(_WIDE_KEYS | s) is not None:
+                    s = (s + 1) % 0xFFFC
+                p.key = _WIDE_KEYS | s
         if p.medium:
             m = p.medium.encode()
             head += bytes((len(m),)) + m
@@ -222,6 +243,9 @@ class PacketStore:
             elif k == _DONE5:
                 m = st.get(k) or b""
                 self.done = m[: len(m) - len(m) % 5]
+            elif k == _DONE7:
+                m = st.get(k) or b""
+                self.done_wide = m[: len(m) - len(m) % 7]
             elif k == _DONE:
                 # an older acomm's pairs: kept, with "until" left for the
                 # transport to fill in (0xFFFF, then the minute it starts)
@@ -233,7 +257,7 @@ class PacketStore:
                 heads[k] = True
         out = []
         for k in keys:
-            if k == _DONE or k == _DONE5:
+            if k == _DONE or k == _DONE5 or k == _DONE7:
                 continue
             if k == _META or k >> 24:
                 if k != _META and (k & 0xFFFFFF) not in heads:
@@ -254,13 +278,20 @@ class PacketStore:
             return None
         s = Stored()
         s.key = k
-        s.origin, s.final, s.pid, s.prio = rec[0], rec[1], (rec[2] << 8) | rec[3], rec[4]
-        s.compressed = bool(rec[5] & _F_COMPRESSED)
-        s.expiry = int.from_bytes(rec[6:10], "big")
-        s.chunks = chunks = rec[10]
-        at = _HDR
+        try:
+            s.origin, at = get_addr(rec, 0)
+            s.final, at = get_addr(rec, at)
+        except errors.DecodeError:
+            return None
+        if len(rec) < at + 9:
+            return None
+        s.pid, s.prio, flags = (rec[at] << 8) | rec[at + 1], rec[at + 2], rec[at + 3]
+        s.compressed = bool(flags & _F_COMPRESSED)
+        s.expiry = int.from_bytes(rec[at + 4 : at + 8], "big")
+        s.chunks = chunks = rec[at + 8]
+        at += 9
         s.medium = None
-        if rec[5] & _F_MEDIUM:
+        if flags & _F_MEDIUM:
             if at >= len(rec) or at + 1 + rec[at] > len(rec):
                 return None
             try:

@@ -18,6 +18,9 @@
 #   byte 0: kind (top 2 bits: 0 flood, 1 request, 2 reply, 3 error) and a 6-bit
 #           count: the hops so far for a flood, a request or a reply, the
 #           destinations for an error
+#   Node ids (origin, dest) are one byte, and three for an id of 256 or
+#   more (0xFF and 2 bytes, acomm.frame.put_addr); the sizes below are for
+#   one-byte ids.
 #   request (flooded), 10 bytes:
 #     kind|hops  id  origin  origin_seq(2)  dest  dest_seq(2)  cost(2)
 #     id: the origin's request counter (a relay drops an (origin, id) it has
@@ -100,6 +103,7 @@
 
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError
+from ..frame import addr_bytes, get_addr
 
 BROADCAST = const(255)  # acomm.link.BROADCAST's node id
 UNKNOWN_SEQ = const(0xFFFF)
@@ -153,39 +157,45 @@ def _chk(v, top, what):
     return MAX_COST if top < 0 and v > MAX_COST else v
 
 
+def _id(v, what):
+    # node id v as it goes on the water: 0..254 in a byte, 256..65534 in three
+    if _chk(v, 65534, what) == 255:
+        _chk(-1, 65534, what)  # 255 is the broadcast address, no node's
+    return addr_bytes(v)
+
+
 def encode_request(rid, origin, origin_seq, dest, dest_seq, hops, cost):
-    """A route request: 10 bytes. dest_seq UNKNOWN_SEQ when the origin knows none; cost saturates."""
+    """A route request: 10 bytes (2 more per id of 256 or more). dest_seq UNKNOWN_SEQ when the
+    origin knows none; cost saturates."""
     o = _chk(origin_seq, 0xFFFE, "origin seq")
     d = _chk(dest_seq, 0xFFFF, "destination seq")
     c = _chk(cost, -1, "cost")
-    return bytes((_REQUEST << 6 | _chk(hops, MAX_HOPS, "count"), _chk(rid, 255, "request id"), _chk(origin, 254, "origin"),
-                  o >> 8, o & 0xFF, _chk(dest, 254, "destination"), d >> 8, d & 0xFF, c >> 8, c & 0xFF))
+    return (bytes((_REQUEST << 6 | _chk(hops, MAX_HOPS, "count"), _chk(rid, 255, "request id"))) + _id(origin, "origin")
+            + bytes((o >> 8, o & 0xFF)) + _id(dest, "destination") + bytes((d >> 8, d & 0xFF, c >> 8, c & 0xFF)))
 
 
 def encode_reply(dest, dest_seq, origin, hops, cost, lifetime_ms):
-    """A route reply: 8 bytes. lifetime rounds up to 4 s units, 4 s to 17 min."""
+    """A route reply: 8 bytes (2 more per id of 256 or more). lifetime rounds up to 4 s units,
+    4 s to 17 min."""
     units = (lifetime_ms + LIFETIME_UNIT_MS - 1) // LIFETIME_UNIT_MS
     s = _chk(dest_seq, 0xFFFE, "destination seq")
     c = _chk(cost, -1, "cost")
-    return bytes((_REPLY << 6 | _chk(hops, MAX_HOPS, "count"), _chk(dest, 254, "destination"), s >> 8, s & 0xFF,
-                  _chk(origin, 254, "origin"), c >> 8, c & 0xFF, 1 if units < 1 else (255 if units > 255 else units)))
+    return (bytes((_REPLY << 6 | _chk(hops, MAX_HOPS, "count"),)) + _id(dest, "destination") + bytes((s >> 8, s & 0xFF))
+            + _id(origin, "origin") + bytes((c >> 8, c & 0xFF, 1 if units < 1 else (255 if units > 255 else units))))
 
 
 def encode_error(lost):
-    """A route error for [(dest, seq)], 1..16 of them: 1 + 3 bytes each."""
+    """A route error for [(dest, seq)], 1..16 of them: 1 + 3 bytes each (5 for an id of 256 or more)."""
     if not 1 <= len(lost) <= MAX_ERRORS:
         from ..errors import EncodeError
 
         raise EncodeError("a route error names 1..%d destinations, not %d" % (MAX_ERRORS, len(lost)))
-    out = bytearray(1 + 3 * len(lost))
-    out[0] = _ERROR << 6 | len(lost)
-    i = 1
+    out = bytearray((_ERROR << 6 | len(lost),))
     for d, s in lost:
-        out[i] = _chk(d, 254, "destination")
+        out.extend(_id(d, "destination"))
         s = _chk(s, 0xFFFE, "destination seq")
-        out[i + 1] = s >> 8
-        out[i + 2] = s & 0xFF
-        i += 3
+        out.append(s >> 8)
+        out.append(s & 0xFF)
     return bytes(out)
 
 
@@ -199,33 +209,37 @@ def decode(data):
     kind = data[0] >> 6
     n = data[0] & 0x3F
     if kind == _REQUEST or kind == _REPLY:
-        # the same checks on both: their ids (origin and destination), sequence number and cost
-        if kind == _REQUEST:
-            if len(data) != 10:
-                raise DecodeError("route request of %d bytes, expected 10" % len(data))
-            a, b = data[2], data[5]  # origin, dest
-            s = (data[3] << 8) | data[4]  # the origin's
-            cost = (data[8] << 8) | data[9]
-        else:
-            if len(data) != 8:
-                raise DecodeError("route reply of %d bytes, expected 8" % len(data))
-            a, b = data[1], data[4]  # dest, origin
-            s = (data[2] << 8) | data[3]  # the destination's
-            cost = (data[5] << 8) | data[6]
-        if a > 254 or b > 254 or s == UNKNOWN_SEQ or cost > MAX_COST or (kind == _REPLY and data[7] == 0):
-            raise DecodeError("route control with a reserved id, sequence number or cost, or no lifetime")
-        if kind == _REQUEST:
-            return ("request", data[1], a, s, b, (data[6] << 8) | data[7], n, cost)
-        return ("reply", a, s, b, n, cost, data[7] * LIFETIME_UNIT_MS)
+        # the same checks on both: their ids (origin and destination), sequence number and cost.
+        # request: kind|hops id origin seq(2) dest seq(2) cost(2); reply: kind|hops dest seq(2)
+        # origin cost(2) lifetime; an id is 1 byte or 3 (get_addr raises when it is cut short)
+        q = kind == _REQUEST
+        a, i = get_addr(data, 2 if q else 1)  # request: origin; reply: dest
+        b, j = get_addr(data, i + 2)  # and the other
+        if len(data) != j + (4 if q else 3):
+            raise DecodeError("route %s of %d bytes" % ("request" if q else "reply", len(data)))
+        s = (data[i] << 8) | data[i + 1]  # request: the origin's; reply: the destination's
+        cost = (data[j + 2 if q else j] << 8) | data[j + 3 if q else j + 1]
+        if s == UNKNOWN_SEQ or cost > MAX_COST or (not q and data[j + 2] == 0):
+            raise DecodeError("route control with a reserved sequence number or cost, or no lifetime")
+        if q:
+            return ("request", data[1], a, s, b, (data[j] << 8) | data[j + 1], n, cost)
+        return ("reply", a, s, b, n, cost, data[j + 2] * LIFETIME_UNIT_MS)
     if kind == _ERROR:
-        if not 1 <= n <= MAX_ERRORS or len(data) != 1 + 3 * n:
-            raise DecodeError("route error for %d destinations in %d bytes" % (n, len(data)))
+        if not 1 <= n <= MAX_ERRORS:
+            raise DecodeError("route error for %d destinations" % n)
         lost = []
-        for i in range(1, len(data), 3):
-            s = (data[i + 1] << 8) | data[i + 2]
-            if data[i] > 254 or s == UNKNOWN_SEQ:
-                raise DecodeError("route error with a reserved id or sequence number")
-            lost.append((data[i], s))
+        i = 1
+        for _ in range(n):
+            d, i = get_addr(data, i)
+            if i + 2 > len(data):
+                raise DecodeError("route error cut short")
+            s = (data[i] << 8) | data[i + 1]
+            if s == UNKNOWN_SEQ:
+                raise DecodeError("route error with a reserved sequence number")
+            lost.append((d, s))
+            i += 2
+        if i != len(data):
+            raise DecodeError("route error for %d destinations in %d bytes" % (n, len(data)))
         return ("error", lost)
     # kind 0, a flood: the flood's module reads it (heard() hands floods to the flooder before
     # this, so a node decodes here only route control, and loads that module only for floods)
@@ -313,7 +327,7 @@ class Routing:
     def offer(self, now, dest, next_hop, link, cost, seq, lifetime_ms):
         """A route heard of (a reply, a request's reverse path, traffic passing through). -> True
         when it is now the route to dest; AcommError for a bad id, cost or sequence number."""
-        if not (0 <= dest <= 254 and 0 <= next_hop <= 254) or cost < 0 or seq >= _SEQ_MOD:
+        if not (0 <= dest <= 65534 and 0 <= next_hop <= 65534) or 255 in (dest, next_hop) or cost < 0 or seq >= _SEQ_MOD:
             raise AcommError("route to %r via %r: bad id, cost or sequence number" % (dest, next_hop))
         routes = self.routes
         r = routes.get(dest)
@@ -619,7 +633,7 @@ class Routing:
         d = link.discovery
         if d.state(origin) != _AVAILABLE or d.state(final) != _AVAILABLE:
             return
-        key = origin << 8 | final
+        key = origin << 16 | final
         cuts = self._cuts
         t = cuts.get(key)
         if t is not None and ticks_diff(now, t) < self.lifetime_ms:

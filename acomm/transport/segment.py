@@ -29,13 +29,15 @@
 #   flags    R Z 000000        R relay fields follow, Z body compressed
 #   pid      2 bytes           the origin's packet id (duplicate suppression)
 #   length   1..3 bytes        body length, 7 bits per byte, high bit = more
-#   R only:  origin, final destination (node ids), priority (1..16, one
-#            byte), lifespan left in seconds (2 bytes, saturating)
+#   R only:  origin, final destination (node ids: one byte each, three
+#            for an id of 256 or more, acomm.frame.put_addr), priority
+#            (1..16, one byte), lifespan left in seconds (2 bytes, saturating)
 # A packet sent straight to its neighbour costs 4 bytes (length < 128) plus
 # 1 per fragment; docs/wire-format.md has the examples.
 
 from ..compat import const
 from ..errors import DecodeError, EncodeError
+from ..frame import addr_bytes, get_addr, is_addr
 
 FRAG_HEADER = const(1)
 MAX_INDEX = const(4095)
@@ -162,10 +164,14 @@ def packet_header(pid, length, compressed=False, relay=None):
             break
     if relay is not None:
         origin, final, prio, life = relay
-        if not (0 <= origin <= 254 and 0 <= final <= 254 and 1 <= prio <= 16):
+        if not (is_addr(origin) and is_addr(final) and 1 <= prio <= 16):
             raise EncodeError("relay fields out of range: %r" % (relay,))
         life = 0 if life < 0 else (_MAX_LIFE_S if life > _MAX_LIFE_S else int(life))
-        out.extend((origin, final, prio, life >> 8, life & 0xFF))
+        if origin > 254 or final > 254:
+            out.extend(addr_bytes(origin) + addr_bytes(final))
+        else:
+            out.extend((origin, final))
+        out.extend((prio, life >> 8, life & 0xFF))
     return bytes(out)
 
 
@@ -200,12 +206,14 @@ def decode_packet_header(data):
     h.length = length
     h.relay = None
     if f & _F_RELAY:
-        if i + 5 > n:
+        origin, i = get_addr(data, i)
+        final, i = get_addr(data, i)
+        if i + 3 > n:
             raise DecodeError("relay fields cut short")
-        prio = data[i + 2]
-        if not 1 <= prio <= 16 or data[i] > 254 or data[i + 1] > 254:
+        prio = data[i]
+        if not 1 <= prio <= 16:
             raise DecodeError("relay fields out of range")
-        h.relay = (data[i], data[i + 1], prio, (data[i + 3] << 8) | data[i + 4])
-        i += 5
+        h.relay = (origin, final, prio, (data[i + 1] << 8) | data[i + 2])
+        i += 3
     h.size = i
     return h

@@ -112,12 +112,12 @@ def test_doc_examples_decode_and_encode():
 
 
 def _random_addrs(rng):
-    if rng.below(2):
-        src = rng.below(16)
-        dst = rng.below(16)
-    else:
-        src = rng.below(F.MAX_ADDR + 1)
-        dst = rng.below(F.MAX_ADDR + 1)
+    # a third each: short ids, one-byte ids, any ids (mostly escaped)
+    top = (15, F.NARROW_MAX_ADDR, F.MAX_ADDR)[rng.below(3)]
+    src = rng.below(top + 1)
+    dst = rng.below(top + 1)
+    if src == F.BROADCAST:
+        src = 256
     if dst == src or rng.below(8) == 0:
         dst = F.BROADCAST
     return src, dst
@@ -125,8 +125,8 @@ def _random_addrs(rng):
 
 def test_raw_round_trip_10000_random_frames():
     rng = Prng(2024)
-    buf = bytearray(48)
-    wide = short = bcast = 0
+    buf = bytearray(40 + F.RAW_OVERHEAD_MAX)
+    wide = short = bcast = escaped = 0
     for _ in range(10000):
         src, dst = _random_addrs(rng)
         fr = F.Frame(rng.below(8), src, dst, rng.below(64), rng.bytes(rng.below(41)), rng.below(16))
@@ -134,13 +134,15 @@ def test_raw_round_trip_10000_random_frames():
         assert n == len(fr.payload) + F.raw_overhead(src, dst)
         if n - len(fr.payload) == F.RAW_OVERHEAD_WIDE:
             wide += 1
+        elif n - len(fr.payload) > F.RAW_OVERHEAD_WIDE:
+            escaped += 1
         else:
             short += 1
         if dst == F.BROADCAST:
             bcast += 1
         got = F.decode_raw(memoryview(buf)[:n])
         assert got == fr, (got, fr)
-    assert wide > 1000 and short > 1000 and bcast > 1000
+    assert wide > 1000 and short > 1000 and bcast > 1000 and escaped > 1000
 
 
 def test_elided_round_trip_10000_random_frames():
@@ -223,6 +225,8 @@ def test_overhead_constants():
     assert F.raw_overhead(16, F.BROADCAST) == F.RAW_OVERHEAD_WIDE == 6
     assert F.raw_overhead(3, 200) == 6
     assert F.raw_overhead(200, 3) == 6
+    assert F.raw_overhead(3, 256) == F.raw_overhead(256, 3) == 8
+    assert F.raw_overhead(256, F.BROADCAST) == F.raw_overhead(300, 1000) == F.RAW_OVERHEAD_MAX == 10
     assert F.ELIDED_OVERHEAD == 1
     assert len(F.encode_elided(F.Frame(F.DATA, 1, 2, 0))) == 1
     assert len(F.encode_elided(F.Frame(F.DATA, 1, 2, 0, b"", F.F_FRAG))) == 2
@@ -256,10 +260,10 @@ def test_encode_errors_raw():
         {"seq": 64},
         {"src": -1},
         {"src": 255},
-        {"src": 256},
         {"src": 255, "dst": F.BROADCAST},
+        {"src": 65535},
         {"dst": -1},
-        {"dst": 256},
+        {"dst": 65535},
         {"src": 3, "dst": 3},
         {"src": 200, "dst": 200},
         {"b": bytearray(4)},
@@ -276,6 +280,9 @@ def test_encode_errors_raw():
     assert enc(t=7, flags=15, seq=63) == 5
     assert enc(src=254, dst=0) == 6
     assert enc(src=0, dst=254) == 6
+    assert enc(src=256, dst=0) == 8
+    assert enc(src=65534, dst=300) == 10
+    assert enc(src=300, dst=F.BROADCAST) == 10
     assert enc(payload=b"x" * 59) == 64
     assert enc(src=20, payload=b"x" * 58) == 64
     # encode_raw (allocating) checks the same things
@@ -382,12 +389,28 @@ def test_wrong_versions_are_rejected_even_with_good_crc():
     assert F.decode_raw(_with_crc(body)) == F.Frame(F.DATA, 3, 5, 9, b"hi")
 
 
-def test_reserved_address_255_in_wide_header():
-    for dst, src in ((255, 3), (3, 255), (255, 255), (255, 200), (200, 255)):
-        data = _with_crc(bytes([0x60, 0x01, dst, src]) + b"x")
+def test_escaped_ids_in_wide_header():
+    # 0xFF starts an id of two more bytes, 256..65534: one written with
+    # fewer bytes, 65535, or one that runs into the CRC is refused
+    for addrs in ((255, 0, 255, 3), (255, 0, 16, 3), (3, 255, 0, 254), (255, 255, 255, 3), (255, 1), (3, 255, 1)):
+        data = _with_crc(bytes([0x60, 0x01]) + bytes(addrs))
         e = _raises(DecodeError, F.decode_raw, data)
         assert not isinstance(e, CRCError)
-    assert F.decode_raw(_with_crc(bytes([0x60, 0x01, 254, 3]))) == F.Frame(F.DATA, 3, 254, 1)
+        _raises(DecodeError, F.raw_addresses, data)
+    data = _with_crc(bytes([0x60, 0x01, 255, 1, 0, 3]) + b"x")
+    assert F.decode_raw(data) == F.Frame(F.DATA, 3, 256, 1, b"x")
+    assert F.raw_addresses(data) == (3, 256) and F.check_raw(data) == 6
+    data = _with_crc(bytes([0x60, 0x01, 254, 255, 0xFF, 0xFE]))
+    assert F.decode_raw(data) == F.Frame(F.DATA, 65534, 254, 1)
+    # every id the API can give has one encoding, and get_addr reads it back
+    for a in (0, 15, 254, 256, 4095, 65534):
+        b = F.addr_bytes(a)
+        assert len(b) == F.addr_size(a) and F.get_addr(b, 0) == (a, len(b))
+        buf = bytearray(4)
+        assert F.put_addr(buf, 1, a) == 1 + len(b) and bytes(buf[1 : 1 + len(b)]) == b
+    assert not F.is_addr(255) and not F.is_addr(65535) and not F.is_addr(-1) and F.is_addr(256)
+    for b in (b"", b"\xff", b"\xff\x01", b"\xff\x00\xff", b"\xff\xff\xff"):
+        _raises(DecodeError, F.get_addr, b, 0)
 
 
 def test_non_canonical_wide_header_for_short_addresses():

@@ -13,12 +13,19 @@ from acomm.prng import Prng
 from .fuzz_base import Failure, Target
 
 
+def _node_id(rng):
+    # a node id, a quarter of them 256..65534 (three bytes on the water)
+    return rng.range(256, 65535) if rng.chance(0.25) else rng.below(255)
+
+
 def _frame_target():
     rng = Prng(101)
     corpus = []
-    for i in range(24):
-        src = rng.below(20) if i % 3 else rng.below(255)
+    for i in range(32):
+        src = rng.below(20) if i % 3 else (_node_id(rng) if i < 24 else rng.range(256, 65535))
         dst = (src + 1 + rng.below(250)) % 255 if rng.chance(0.8) else fr.BROADCAST
+        if i >= 24 and i % 2:
+            dst = rng.range(256, 65535)
         corpus.append(fr.encode_raw(fr.Frame(rng.below(8), src, dst, rng.below(64), rng.bytes(rng.below(40)), rng.below(16))))
 
     def run(data, rng):
@@ -48,9 +55,15 @@ def _segment_target():
     corpus.append(bytes((head,)) + body)
     head, body = segment.sack_refused(1, 0, segment.REFUSE_FULL)
     corpus.append(bytes((head,)) + body)
+    for _ in range(8):
+        # a packet header with its relay fields, behind a first byte of 0xFE
+        relay = (_node_id(rng), _node_id(rng), rng.range(1, 17), rng.below(70000))
+        corpus.append(b"\xfe" + segment.packet_header(rng.below(65536), rng.below(5000), rng.chance(0.5), relay))
 
     def run(data, rng):
-        if data:
+        if data and data[0] == 0xFE:
+            segment.decode_packet_header(data[1:])
+        elif data:
             segment.decode(data[0] & 0x0F if data[0] < 0x80 else data[0], data[1:])
 
     return Target("segment", corpus, run)
@@ -302,13 +315,13 @@ def _route_target():
     rng = Prng(136)
     corpus = []
     for _ in range(8):
-        corpus.append(W.encode_request(rng.below(256), rng.below(255), rng.below(65535), rng.below(255),
+        corpus.append(W.encode_request(rng.below(256), _node_id(rng), rng.below(65535), _node_id(rng),
                                        rng.below(65536), rng.below(64), rng.below(70000)))
-        corpus.append(W.encode_reply(rng.below(255), rng.below(65535), rng.below(255), rng.below(64),
+        corpus.append(W.encode_reply(_node_id(rng), rng.below(65535), _node_id(rng), rng.below(64),
                                      rng.below(70000), rng.below(1100000)))
-        corpus.append(W.encode_error([(rng.below(255), rng.below(65535)) for _ in range(rng.range(1, 17))]))
+        corpus.append(W.encode_error([(_node_id(rng), rng.below(65535)) for _ in range(rng.range(1, 17))]))
     for _ in range(8):
-        corpus.append(F.encode_flood(rng.below(255), rng.below(256), rng.below(64),
+        corpus.append(F.encode_flood(_node_id(rng), rng.below(256), rng.below(64),
                                      rng.bytes(rng.range(1, F.MAX_DATA))))
 
     def run(data, rng):

@@ -1,6 +1,6 @@
 # Multi-hop networks for the routing figures (issue 36): the real stack on
-# seed 004's BPSK packet modem (400 bit/s, raw frames, so node ids up to
-# 254), an Aloha MAC, a loss curve that cuts hearing off at RANGE_M, and
+# seed 004's BPSK packet modem (400 bit/s, raw frames: node ids of 256 and
+# more take 3 bytes on the water, and 255 is no node's), an Aloha MAC, a loss curve that cuts hearing off at RANGE_M, and
 # end-to-end flows of numbered packets. One run is a scenario, a way to
 # route, a seed and a length; it returns what it measured.
 #
@@ -14,16 +14,17 @@
 #              to and from a node of it
 #   partition  two ends joined by a relay (2 hops) and a longer way round
 #              (3 hops); the relay dies at minute 10 and comes back at 20
-#   large      `nodes` (default 250) at random, at the random scenario's
-#              density: the simulator's cost as networks grow
+#   large      `nodes` (default 256) at random, at the random scenario's
+#              density: the simulator's cost as networks grow (1,024 too)
 #
 # Ways to route:
 #   learned    acomm.transport's route discovery (routing=True)
 #   flooding   every packet flooded to every node (Transport.flood): the
 #              destination takes it, everyone else only passes it on
 #   oracle     static routes from the simulator's geometry (shortest path
-#              in hops over the links in range), updated every 10 s, so
-#              they follow the AUVs and the dying relay at once
+#              in hops over the links in range, a tree towards each flow's
+#              destination), updated every 10 s, so they follow the AUVs and
+#              the dying relay at once
 #
 # Measured: pdr (delivered / sent, each packet counted once), latency
 # quantiles (send to first delivery), overhead (every byte of route control
@@ -58,6 +59,12 @@ MODEM = "bpsk"
 ADVERT_MS = 60000
 SCENARIOS = ("chain", "grid", "random", "partition", "large")
 MODES = ("learned", "flooding", "oracle")
+MAX_NODES = 4096
+
+
+def node_id(i):
+    """The node id of node index i: i + 1, skipping 255 (the broadcast address, no node's)."""
+    return i + 1 if i < 254 else i + 2
 _EPOCH_MS = 1000  # the simulator's clock starts here
 
 
@@ -116,7 +123,7 @@ class RoutedNet:
         self.rng = Prng(seed * 7919 + SCENARIOS.index(scenario))
         self.ch = Channel(seed=seed, loss_curve=LOSS_CURVE)
         self.w = World(seed=seed, channel=self.ch, fast=fast)  # fast=False: every step taken (tests)
-        self.w.names_capacity = 255
+        self.w.names_capacity = max(255, (nodes or 0) + 8)
         self.names = []
         self.tracks = {}
         self.sent = {}  # (flow, seq) -> (time, dst name)
@@ -173,9 +180,9 @@ class RoutedNet:
         return places, self._pairs(reach, 8) + [(64, hub), (hub, 65)], 240000
 
     def _large(self, n):
-        n = n or 250
-        if not 16 <= n <= 254:
-            raise ValueError("large: 16..254 nodes (node ids are one byte on the water)")
+        n = n or 256
+        if not 16 <= n <= MAX_NODES:
+            raise ValueError("large: 16..%d nodes" % MAX_NODES)
         places, _, reach = self._scatter(n)
         return places, self._pairs(reach, 16), 360000
 
@@ -208,11 +215,11 @@ class RoutedNet:
         name = "n%d" % (i + 1)
         self.names.append(name)
         mac = Aloha(4 * self.airtime, seed=self.seed * 1000 + i)
-        sn = self.w.add(name, i + 1, MODEM, position=(pos[0], pos[1], 10.0), mac=mac,
+        sn = self.w.add(name, node_id(i), MODEM, position=(pos[0], pos[1], 10.0), mac=mac,
                         link_opts={"advert_period_ms": ADVERT_MS, "queue_capacity": 16},
                         listener=self._listener(name))
         if i in self.tracks:
-            self.ch.set_track(i + 1, self.tracks[i])
+            self.ch.set_track(node_id(i), self.tracks[i])
         # the route finder's and flooder's random draws differ per seed, not only per node id
         routing = None if self.mode == "oracle" else {"seed": self.seed * 1000 + i}
         sn.t = Transport.of(sn.node, wall=lambda: self.w.now() // 1000, routing=routing)
@@ -224,7 +231,7 @@ class RoutedNet:
                 return
             data = ev[3]
             if self.mode == "flooding":
-                if len(data) < 7 or data[6] != int(me[1:]):
+                if len(data) < 8 or (data[6] << 8 | data[7]) != int(me[1:]):
                     return  # a flood for someone else
             if len(data) < 6:
                 return
@@ -268,7 +275,7 @@ class RoutedNet:
 
     def send(self, now, flow, seq, src, dst):
         """One numbered packet of a flow, src and dst node indices."""
-        body = bytes([flow >> 8, flow & 0xFF]) + seq.to_bytes(4, "big") + bytes([dst + 1])
+        body = bytes([flow >> 8, flow & 0xFF]) + seq.to_bytes(4, "big") + (dst + 1).to_bytes(2, "big")
         body += bytes(PAYLOAD - len(body))
         t = self.node(src).t
         self.sent[(flow, seq)] = (now, self.names[dst])
@@ -280,28 +287,28 @@ class RoutedNet:
     # -- the oracle -----------------------------------------------------------------------------
     def oracle_routes(self, now):
         n = len(self.names)
-        pos = [self.ch.position(i + 1) for i in range(n)]
-        near = [[j for j in range(n) if j != i and _dist(pos[i], pos[j]) <= RANGE_M] for i in range(n)]
+        pos = [self.ch.position(node_id(i)) for i in range(n)]
+        near = _in_range(pos)
         for i in range(n):
-            # breadth first from i: the first hop on a shortest path to each node
-            first = {}
-            frontier = []
-            for j in near[i]:
-                first[j] = j
-                frontier.append(j)
+            self.node(i).t.router.routes.clear()
+        for d in sorted(set(f[1] for f in self.flows.flows)):
+            # breadth first from each flow's destination: a node's parent in that tree is its
+            # first hop on a shortest path there (hearing is symmetric); only the flows'
+            # destinations are ever sent to, and n trees of 1,024 nodes every 10 s cost minutes
+            parent = {d: d}
+            frontier = [d]
             while frontier:
                 nxt = []
                 for a in frontier:
                     for b in near[a]:
-                        if b != i and b not in first:
-                            first[b] = first[a]
+                        if b not in parent:
+                            parent[b] = a
                             nxt.append(b)
                 frontier = nxt
-            routes = self.node(i).t.router.routes
-            routes.clear()
-            for d, hop in first.items():
+            name = self.names[d]
+            for i, hop in parent.items():
                 if hop != d:
-                    routes[self.names[d]] = self.names[hop]
+                    self.node(i).t.router.routes[name] = self.names[hop]
 
     # -- running and measuring -------------------------------------------------------------------
     def run(self, minutes, drain_minutes=5):
@@ -369,6 +376,20 @@ def _largest_component(places):
         if len(seen) > len(best):
             best = sorted(seen)
     return best
+
+
+def _in_range(pos):
+    # -> for each node index, the indices within RANGE_M: cells of RANGE_M on a side, so that
+    # each node is measured against its own cell and the 8 around it, not against every node
+    cells = {}
+    for i, p in enumerate(pos):
+        cells.setdefault((int(p[0] // RANGE_M), int(p[1] // RANGE_M)), []).append(i)
+    near = []
+    for i, p in enumerate(pos):
+        cx, cy = int(p[0] // RANGE_M), int(p[1] // RANGE_M)
+        near.append([j for dx in (-1, 0, 1) for dy in (-1, 0, 1) for j in cells.get((cx + dx, cy + dy), ())
+                     if j != i and _dist(p, pos[j]) <= RANGE_M])
+    return near
 
 
 def _dist(a, b):

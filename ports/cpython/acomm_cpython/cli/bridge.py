@@ -58,7 +58,7 @@ def _imc_arguments(p):
     g.add_argument("--seed", type=int, default=1, help="the simulation's seed")
     r = p.add_argument_group("real modems")
     r.add_argument("--name", help="this node's acomm name (and IMC system name)")
-    r.add_argument("--id", type=int, help="this node's acomm id, 0..254")
+    r.add_argument("--id", type=int, help="this node's acomm id, 0..254 or 256..65534")
     r.add_argument("--known", action="append", default=[], metavar="NAME=ID", help="another acomm node")
     r.add_argument("--modem", action="append", default=[], metavar="KIND:DEVICE[:BAUD]|KIND:tcp://HOST:PORT",
                    help="a modem link (seatrac, evologics, micromodem, benthos, iridium, sms, transparent), "

@@ -34,7 +34,7 @@ from ..udp import DEFAULT_GROUP, DEFAULT_PORT
 
 def add_arguments(p):
     p.add_argument("--name", required=True, help="this node's name")
-    p.add_argument("--id", type=int, required=True, help="this node's id, 0..254")
+    p.add_argument("--id", type=int, required=True, help="this node's id, 0..254 or 256..65534")
     p.add_argument("--known", action="append", default=[], metavar="NAME=ID", help="a node's name (else node-ID)")
     p.add_argument("--udp", metavar="[HOST:]PORT", help="a UDP link with its unicast socket here (0: any port)")
     p.add_argument("--group", default="%s:%d" % (DEFAULT_GROUP, DEFAULT_PORT), metavar="ADDR:PORT",

@@ -113,7 +113,7 @@ def measures(log, collisions, sim_s):
 # -- routed networks (chain, random, grid with routing) -------------------------------
 
 def _routed(scenario, p, seed, minutes):
-    from acomm_sim.routednet import MODES, RoutedNet
+    from acomm_sim.routednet import MAX_NODES, MODES, RoutedNet
 
     mode = p["routing"]
     if mode not in MODES:
@@ -122,8 +122,8 @@ def _routed(scenario, p, seed, minutes):
     nodes = None
     if scenario == "grid":
         nodes = int(p["nodes"])
-        if not 4 <= nodes <= 254:
-            raise ValueError("grid: nodes is 4..254 with routing")
+        if not 4 <= nodes <= MAX_NODES:
+            raise ValueError("grid: nodes is 4..%d with routing" % MAX_NODES)
     net = RoutedNet(scenario, mode, seed, nodes=nodes)
     # the bench's drain, within the minutes asked for: a fifth of them with no new packet
     m = net.run(minutes * 0.8, minutes * 0.2)

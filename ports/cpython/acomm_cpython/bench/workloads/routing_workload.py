@@ -20,12 +20,16 @@
 #                                       frame through it again (mean of the
 #                                       seeds where that happened; _returned
 #                                       counts them)
-#   routing_*_large_<n>                 the same figures for `large` (one
-#                                       seed, all three ways), so its PDR
-#                                       stands beside its oracle's too
+#   routing_*_large_<n>                 the same figures for `large` at 256
+#                                       and 1,024 nodes (one seed, all three
+#                                       ways), so its PDR stands beside its
+#                                       oracle's too
 #   routing_sim_speedup_<n>_nodes       simulated / wall seconds, `large`
-#   routing_sim_cost_growth_64_to_<n>   wall seconds per simulated second at
-#                                       n nodes over the same at 64 (random)
+#                                       with learned routes, building the
+#                                       network included
+#   routing_sim_cost_growth_64_to_256   wall seconds per simulated second at
+#                                       256 nodes over the same at 64 (random)
+#   routing_sim_cost_growth_256_to_1024 the same, 1,024 nodes over 256
 #
 # A figure with no value (nothing delivered, no recovery seen) is not
 # printed; stderr says which. --quick: the chain and the partition, one
@@ -38,7 +42,7 @@ from acomm_sim.routednet import MODES, RoutedNet
 PER_RUNTIME = ()
 SEEDS = (1, 2, 3, 4, 5)
 MINUTES = {"chain": 40, "grid": 40, "random": 40, "partition": 40, "large": 20}
-LARGE_NODES = 250
+LARGE_NODES = (256, 1024)  # node ids from 256 up take 3 bytes on the water (acomm.frame.put_addr)
 
 
 def _quantile(xs, q):
@@ -105,19 +109,22 @@ def run(emit, quick=False):
             if mode == "learned":
                 cost[s] = wall / sim
         _put_all(put, s, res)
-    # the simulator as networks grow: `large` at LARGE_NODES, one seed, all three ways (learned
-    # routes' PDR beside the oracle's as for the other scenarios); speed from the learned run
-    n = 40 if quick else LARGE_NODES
+    # the simulator as networks grow: `large` at each of LARGE_NODES, one seed, all three ways
+    # (learned routes' PDR beside the oracle's as for the other scenarios); speed from the
+    # learned run
     minutes = 4 if quick else MINUTES["large"]
-    res = {}
-    for mode in MODES:
-        res[mode], w, sm = _scenario("large", mode, (1,), minutes, nodes=n)
-        if mode == "learned":
-            wall, sim = w, sm
-    _put_all(put, "large_%d" % n, res)
-    put("routing_sim_speedup_%d_nodes" % n, sim / wall, "x real time")
-    if "random" in cost:
-        put("routing_sim_cost_growth_64_to_%d" % n, (wall / sim) / cost["random"], "ratio")
+    before = ("random", 64)
+    for n in (40,) if quick else LARGE_NODES:
+        res = {}
+        for mode in MODES:
+            res[mode], w, sm = _scenario("large", mode, (1,), minutes, nodes=n)
+            if mode == "learned":
+                cost[n] = w / sm
+        _put_all(put, "large_%d" % n, res)
+        put("routing_sim_speedup_%d_nodes" % n, 1 / cost[n], "x real time")
+        if before[0] in cost:
+            put("routing_sim_cost_growth_%d_to_%d" % (before[1], n), cost[n] / cost[before[0]], "ratio")
+        before = (n, n)
 
 
 def _put_all(put, s, res):

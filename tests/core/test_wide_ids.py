@@ -1,0 +1,146 @@
+# Node ids of 256 and more (up to 65534): one byte on the water for 0..254,
+# and for the others 0xFF then the id in 2 bytes (acomm.frame.put_addr), in
+# the frame header, adverts, relay fields, route control and floods, and in
+# the store's records and the memory of delivered packets. Here a routed
+# chain of such nodes on a packet modem that carries raw frames, and each
+# place an id of 256 or more must not be confused with the one-byte id it
+# shares modulo 256 (300 and 44).
+from acomm import frame as fr
+from acomm.errors import AuthError, DecodeError
+from acomm.events import EV_PACKET
+from acomm.frame.auth import Auth
+from acomm.link.discovery import decode_advert, encode_advert
+from acomm.transport import Transport
+from acomm.transport import segment as sg
+from acomm.transport.memorystore import MemoryStore
+from acomm.transport.packetstore import PacketStore, key_of
+from acomm_sim.channel import Channel
+from acomm_sim.world import World
+from checks import raises
+
+RANGE = ((0.0, 0.0), (200.0, 0.0), (201.0, 1.0))  # heard within 200 m, never beyond
+IDS = (300, 44, 65534, 1000)  # a chain; 300 and 44 share their low byte
+
+
+def _wall(w):
+    return lambda: w.now() // 1000
+
+
+def _chain(stores=None):
+    w = World(seed=3, channel=Channel(seed=3, loss_curve=RANGE))
+    ns = []
+    for i, nid in enumerate(IDS):
+        sn = w.add("n%d" % nid, nid, "bpsk", position=(150.0 * i, 0.0, 10.0), link_opts={"advert_period_ms": 30000})
+        st = None if stores is None else stores[i]
+        sn.t = Transport.of(sn.node, store=st, wall=_wall(w), routing={"search_ms": 30000})
+        ns.append(sn)
+    w.run(65000)  # two advert rounds: every node knows its neighbours
+    return w, ns
+
+
+def _got(sn):
+    return [(e[1], e[3]) for e in sn.events if e[0] == EV_PACKET]
+
+
+def _wait(w, cond, ms, step=1000):
+    t = 0
+    while t < ms and not cond():
+        w.run(step)
+        t += step
+    return cond()
+
+
+def test_a_routed_chain_of_wide_ids_carries_packets_and_floods():
+    w, ns = _chain()
+    first, last = ns[0], ns[3]
+    for sn in ns:
+        d = sn.node.link("acoustic").discovery
+        assert sorted(d.nodes) == sorted(x for x in IDS if abs(IDS.index(x) - ns.index(sn)) == 1)
+    # a flood from 65534 reaches every other node once (a flood is not acknowledged: on a
+    # quiet channel, before the packets, no copy is lost to a collision)
+    ns[2].t.flood(w.now(), b"all surface")
+    w.run(90000)
+    for sn in ns:
+        assert _got(sn) == ([] if sn is ns[2] else [("n65534", b"all surface")]), sn.node.name
+        del sn.events[:]
+    first.t.send(w.now(), "n1000", b"three hops by ids of two bytes", 3600)
+    assert _wait(w, lambda: _got(last), 400000), first.t.stats
+    assert _got(last) == [("n300", b"three hops by ids of two bytes")]
+    assert first.t.router.routing.table.lookup(w.now(), 1000)[0] == 44
+    # the relays learned the way back to 300, not to 44 (its low byte)
+    assert ns[2].t.router.routing.table.lookup(w.now(), 300)[0] == 44
+    last.t.send(w.now(), "n300", b"and back", 3600)
+    assert _wait(w, lambda: _got(first), 400000)
+    assert _got(first) == [("n1000", b"and back")]
+    for sn in ns:
+        assert sn.t.stats["rx_bad"] == 0 and sn.node.link("acoustic").stats["rx_bad"] == 0
+
+
+def test_a_relay_keeps_a_wide_origins_packet_through_a_restart():
+    stores = [MemoryStore() for _ in IDS]
+    w, ns = _chain(stores)
+    first, relay, last = ns[0], ns[1], ns[3]
+    first.t.send(w.now(), "n1000", b"custody", 3600)
+    # the relay (44) takes custody; 300's packet is keyed apart from 44's own
+    assert _wait(w, lambda: relay.t.stats["relayed"] >= 1, 400000)
+    relay.node.transport = None
+    t2 = Transport.of(relay.node, store=stores[1], wall=_wall(w), routing={"search_ms": 30000})
+    assert _wait(w, lambda: _got(last), 600000), t2.stats
+    assert _got(last) == [("n300", b"custody")]
+
+
+def test_the_store_and_the_done_memory_tell_300_from_44():
+    st = MemoryStore()
+    ps = PacketStore(st)
+
+    class P:
+        body, compressed, medium, chunks, key = b"x" * 20, False, None, 0, None
+
+    a, b = P(), P()
+    a.origin, a.final, a.pid, a.prio, a.expiry = 300, 65534, 7, 5, 2000000000
+    b.origin, b.final, b.pid, b.prio, b.expiry = 44, 1, 7, 5, 2000000000
+    for p in (a, b):
+        p.size = len(p.body)
+        ps.put(p)
+    assert key_of(a) != key_of(b) and key_of(a) >> 16 == 0xFF
+    got = dict((s.origin, s) for s in PacketStore(st).recover())
+    assert sorted(got) == [44, 300] and got[300].final == 65534 and got[300].key == key_of(a)
+    assert PacketStore(st).body(key_of(a)) == b"x" * 20
+    # a second packet from 300 with the same pid low bits takes another slot
+    c = P()
+    c.origin, c.final, c.pid, c.prio, c.expiry, c.size = 556, 2, 7, 5, 2000000000, 20
+    ps.put(c)
+    assert key_of(c) not in (key_of(a), key_of(b))
+    # the done memory: 300's pid 9 is not 44's, and both come back after a restart
+    w = World(seed=1)
+    sn = w.add("n300", 300, "bpsk", position=(0.0, 0.0, 10.0))
+    store = MemoryStore()
+    t = Transport.of(sn.node, store=store, wall=_wall(w))
+    t._remember(300, 9, 600)
+    assert t._is_done(300, 9) and not t._is_done(44, 9) and not t._is_done(556, 9)
+    t._remember(44, 10, 600)
+    assert t._is_done(44, 10) and not t._is_done(300, 10)
+    sn.node.transport = None
+    t2 = Transport.of(sn.node, store=store, wall=_wall(w))
+    assert t2._is_done(300, 9) and t2._is_done(44, 10) and not t2._is_done(44, 9)
+    for k in range(40):
+        t2._remember(1000 + k, k, 7200, False)
+    assert len(t2._done_wide) == 7 * 32 and t2._is_done(1039, 39) and not t2._is_done(300, 9)
+
+
+def test_adverts_relay_fields_and_sealing_with_wide_ids():
+    assert encode_advert(300, 60000) == b"\xff\x01\x2c\x0f"
+    assert decode_advert(encode_advert(300, 60000)) == (300, 60000)
+    assert decode_advert(b"\x2c\x0f") == (44, 60000)
+    for bad in (b"\xff\x00\x2c\x0f", b"\xff\x01\x2c", b"\xff\x01\x2c\x0f\x00", b"\xff\x0f"):
+        raises(DecodeError, decode_advert, bad)
+    h = sg.packet_header(5, 100, False, (300, 2, 3, 600))
+    assert len(h) == len(sg.packet_header(5, 100, False, (44, 2, 3, 600))) + 2
+    assert sg.decode_packet_header(h).relay == (300, 2, 3, 600)
+    raises(DecodeError, sg.decode_packet_header, h[:6])
+    # sealing covers the one-byte ids: a frame from or to 300 is refused, not
+    # sealed under the id it shares with 44
+    auth = Auth(b"k" * 16, 4)
+    raises(AuthError, auth.seal, fr.DATA, 300, 2, b"x")
+    raises(AuthError, auth.seal, fr.DATA, 2, 300, b"x")
+    assert auth.seal(fr.DATA, 44, 2, b"x")
