@@ -42,14 +42,6 @@ def _got(sn):
     return [(e[1], e[3]) for e in sn.events if e[0] == EV_PACKET]
 
 
-def _wait(w, cond, ms, step=1000):
-    t = 0
-    while t < ms and not cond():
-        w.run(step)
-        t += step
-    return cond()
-
-
 def test_a_routed_chain_of_wide_ids_carries_packets_and_floods():
     w, ns = _chain()
     first, last = ns[0], ns[3]
@@ -64,13 +56,13 @@ def test_a_routed_chain_of_wide_ids_carries_packets_and_floods():
         assert _got(sn) == ([] if sn is ns[2] else [("n65534", b"all surface")]), sn.node.name
         del sn.events[:]
     first.t.send(w.now(), "n1000", b"three hops by ids of two bytes", 3600)
-    assert _wait(w, lambda: _got(last), 400000), first.t.stats
+    assert w.run(400000, until=lambda: _got(last)), first.t.stats
     assert _got(last) == [("n300", b"three hops by ids of two bytes")]
     assert first.t.router.routing.table.lookup(w.now(), 1000)[0] == 44
     # the relays learned the way back to 300, not to 44 (its low byte)
     assert ns[2].t.router.routing.table.lookup(w.now(), 300)[0] == 44
     last.t.send(w.now(), "n300", b"and back", 3600)
-    assert _wait(w, lambda: _got(first), 400000)
+    assert w.run(400000, until=lambda: _got(first))
     assert _got(first) == [("n1000", b"and back")]
     for sn in ns:
         assert sn.t.stats["rx_bad"] == 0 and sn.node.link("acoustic").stats["rx_bad"] == 0
@@ -82,10 +74,10 @@ def test_a_relay_keeps_a_wide_origins_packet_through_a_restart():
     first, relay, last = ns[0], ns[1], ns[3]
     first.t.send(w.now(), "n1000", b"custody", 3600)
     # the relay (44) takes custody; 300's packet is keyed apart from 44's own
-    assert _wait(w, lambda: relay.t.stats["relayed"] >= 1, 400000)
+    assert w.run(400000, until=lambda: relay.t.stats["relayed"] >= 1)
     relay.node.transport = None
     t2 = Transport.of(relay.node, store=stores[1], wall=_wall(w), routing={"search_ms": 30000})
-    assert _wait(w, lambda: _got(last), 600000), t2.stats
+    assert w.run(600000, until=lambda: _got(last)), t2.stats
     assert _got(last) == [("n300", b"custody")]
 
 
