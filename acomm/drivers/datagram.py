@@ -128,7 +128,7 @@ class DatagramDriver(SansIO):
     # -- the endpoint table ------------------------------------------------------
     def set_peer(self, node_id, endpoint):
         # A static entry (configuration): never displaced or forgotten.
-        if not fr.is_addr(node_id):
+        if not 0 <= node_id <= fr.MAX_ADDR or node_id == fr.BROADCAST:
             raise EncodeError("node id %d is not a node id" % node_id)
         self._static[node_id] = endpoint
         self._learned.pop(node_id, None)

@@ -13,7 +13,7 @@
 #           short:  byte 2 = DDDD SSSS (destination, source)
 #           wide:   destination, then source, each a node id on the water
 #
-#         A node id on the water (put_addr / get_addr, here and in every
+#         A node id on the water (addr_bytes / get_addr, here and in every
 #         layer above that names a node) is one byte for 0..254, and for
 #         256..65534 the byte 0xFF then the id in 2 bytes: 255 is the API's
 #         broadcast, never a node, so that byte was free and every encoding
@@ -50,8 +50,7 @@ F_COMPRESSED = const(2)
 F_AUTH = const(1)
 
 BROADCAST = const(255)  # API value; see the header comment for the encoding
-MAX_ADDR = const(65534)  # node ids are 0..254 and 256..65534 (255 is BROADCAST)
-NARROW_MAX_ADDR = const(254)  # the ids that take one byte on the water
+MAX_ADDR = const(65534)  # node ids are 0..254 (one byte on the water) and 256..65534 (255 is BROADCAST)
 _SHORT_MAX_ADDR = const(15)
 _ESC = const(0xFF)
 
@@ -110,30 +109,10 @@ def _check_common(ftype, seq, flags, seq_mod):
         raise EncodeError("sequence %d outside 0..%d" % (seq, seq_mod - 1))
 
 
-def is_addr(a):
-    """Whether a is a node id: 0..254 or 256..65534 (255 is BROADCAST)."""
-    return 0 <= a <= MAX_ADDR and a != BROADCAST
-
-
-def addr_size(a):
-    """Bytes node id a takes on the water: 1 for 0..254, else 3."""
-    return 1 if a < BROADCAST else 3
-
-
-def put_addr(buf, i, a):
-    """Writes node id a into the bytearray buf at i (caller checked is_addr
-    and the room); returns the index after it."""
-    if a < BROADCAST:
-        buf[i] = a
-        return i + 1
-    buf[i] = _ESC
-    buf[i + 1] = a >> 8
-    buf[i + 2] = a & 0xFF
-    return i + 3
-
-
 def addr_bytes(a):
-    """Node id a as it goes on the water (see put_addr)."""
+    """Node id a as it goes on the water: 0..254 in one byte, 256..65534 as
+    0xFF and 2 bytes big-endian. The layers that are on every board write
+    this inline: an import is a slot in their module's dict."""
     return bytes((a,)) if a < BROADCAST else bytes((_ESC, a >> 8, a & 0xFF))
 
 
@@ -157,11 +136,11 @@ def get_addr(data, i, end=-1):
 
 
 def _wire_dst(src, dst):
-    if not is_addr(src):
+    if not 0 <= src <= MAX_ADDR or src == BROADCAST:
         raise EncodeError("source address %d is not a node id" % src)
     if dst == BROADCAST:
         return src
-    if not is_addr(dst):
+    if not 0 <= dst <= MAX_ADDR:
         raise EncodeError("destination address %d is not a node id" % dst)
     if dst == src:
         raise EncodeError("node %d cannot address itself" % src)
@@ -172,7 +151,8 @@ def raw_overhead(src, dst):
     """Bytes a raw frame adds to its payload between these two nodes."""
     if src <= _SHORT_MAX_ADDR and (dst <= _SHORT_MAX_ADDR or dst == BROADCAST):
         return RAW_OVERHEAD_SHORT
-    return 4 + addr_size(src) + addr_size(src if dst == BROADCAST else dst)  # broadcast: dst == src
+    # 1 byte for each id below 255, else 3; a broadcast's destination is its source
+    return (6 if src < BROADCAST else 8) + (2 if BROADCAST < dst or (dst == BROADCAST and src > BROADCAST) else 0)
 
 
 def encode_raw_into(buf, ftype, src, dst, seq, payload, flags=0):
@@ -181,14 +161,23 @@ def encode_raw_into(buf, ftype, src, dst, seq, payload, flags=0):
     _check_common(ftype, seq, flags, SEQ_MOD_RAW)
     wdst = _wire_dst(src, dst)
     wide = src > _SHORT_MAX_ADDR or wdst > _SHORT_MAX_ADDR
-    hlen = 2 + addr_size(wdst) + addr_size(src) if wide else 3
+    hlen = (4 + (2 if wdst > BROADCAST else 0) + (2 if src > BROADCAST else 0)) if wide else 3
     n = hlen + len(payload)
     if n + 2 > len(buf):
         raise EncodeError("frame of %d bytes does not fit buffer of %d" % (n + 2, len(buf)))
     buf[0] = (VERSION << 6) | (0x20 if wide else 0) | (ftype << 2) | (flags >> 2)
     buf[1] = ((flags & 3) << 6) | seq
     if wide:
-        put_addr(buf, put_addr(buf, 2, wdst), src)
+        i = 2
+        for a in (wdst, src):
+            if a < BROADCAST:
+                buf[i] = a
+                i += 1
+            else:
+                buf[i] = _ESC
+                buf[i + 1] = a >> 8
+                buf[i + 2] = a & 0xFF
+                i += 3
     else:
         buf[2] = (wdst << 4) | src
     buf[hlen:n] = payload
@@ -205,21 +194,6 @@ def encode_raw(frame):
     return bytes(buf[:n])
 
 
-def _header(data):
-    # -> (source, wire destination, header length) of a raw frame whose
-    # length and version check_raw has seen; the addresses end before the CRC
-    if not data[0] & 0x20:
-        return data[2] & 0x0F, data[2] >> 4, 3
-    end = len(data) - 2
-    wdst, i = get_addr(data, 2, end)
-    src, i = get_addr(data, i, end)
-    if wdst <= _SHORT_MAX_ADDR and src <= _SHORT_MAX_ADDR:
-        # the encoder always uses the short form for these; a wide one is
-        # not ours (and would give two encodings for one frame)
-        raise DecodeError("wide header for short addresses")
-    return src, wdst, i
-
-
 def check_raw(data):
     """Validates version, length, addresses and CRC of a raw frame without
     building a Frame; returns the header length. Raises DecodeError / CRCError."""
@@ -227,7 +201,7 @@ def check_raw(data):
 
 
 def _checked(data):
-    # check_raw's checks; -> _header(data)
+    # check_raw's checks; -> (source, wire destination, header length)
     n = len(data)
     if n < RAW_OVERHEAD_SHORT:
         raise DecodeError("raw frame of %d bytes is shorter than the minimum 5" % n)
@@ -240,7 +214,16 @@ def _checked(data):
     got = crc16(memoryview(data)[: n - 2])
     if want != got:
         raise CRCError("frame CRC 0x%04x does not match computed 0x%04x" % (want, got))
-    return _header(data)
+    # -> (source, wire destination, header length); the addresses end before the CRC
+    if not b0 & 0x20:
+        return data[2] & 0x0F, data[2] >> 4, 3
+    wdst, i = get_addr(data, 2, n - 2)
+    src, i = get_addr(data, i, n - 2)
+    if wdst <= _SHORT_MAX_ADDR and src <= _SHORT_MAX_ADDR:
+        # the encoder always uses the short form for these; a wide one is
+        # not ours (and would give two encodings for one frame)
+        raise DecodeError("wide header for short addresses")
+    return src, wdst, i
 
 
 def raw_addresses(data):

@@ -100,16 +100,6 @@ def _wall_default():
     return int(time.time())
 
 
-def _narrow(a):
-    # Sealing covers the one-byte node ids (0..254, and 255 for broadcast):
-    # the tag's input and the counter file hold a byte per id. A frame to
-    # or from a wider id (acomm.frame.put_addr) is refused, not sealed with
-    # an id that another node shares modulo 256.
-    if not 0 <= a <= 255:
-        raise AuthError("sealing covers node ids 0..254, not %d" % a)
-    return a
-
-
 def _b3(v):
     return bytes(((v >> 16) & 0xFF, (v >> 8) & 0xFF, v & 0xFF))
 
@@ -288,7 +278,9 @@ class Auth:
         if key is None:
             self.stats["no_key"] += 1
             return None if tag is None else False
-        t = key.digest(bytes((3, 1, _narrow(src), _narrow(dst), seq & 0xFF)), _b4(e), _b3(ctr))[: self.tag_len]
+        if src > 255 or dst > 255:
+            raise AuthError("sealing covers node ids 0..254")  # as _tag
+        t = key.digest(bytes((3, 1, src, dst, seq & 0xFF)), _b4(e), _b3(ctr))[: self.tag_len]
         if tag is None:
             return t
         if same(t, tag):
@@ -322,7 +314,14 @@ class Auth:
         return True
 
     def _tag(self, key, ftype, src, dst, seq, ep, ctr, payload):
-        head = bytes((2, ftype & 0xFF, _narrow(src), 255 if dst is None else _narrow(dst), seq & 0xFF))
+        # Sealing covers the one-byte node ids (0..254, 255 for broadcast): the
+        # tag's input and the counter file hold a byte per id. A frame to or
+        # from a wider id (acomm.frame.addr_bytes) is refused, not sealed with
+        # an id that another node shares modulo 256 (MicroPython's bytes()
+        # would keep the low byte without a word)
+        if src > 255 or (dst is not None and dst > 255):
+            raise AuthError("sealing covers node ids 0..254")
+        head = bytes((2, ftype & 0xFF, src, 255 if dst is None else dst, seq & 0xFF))
         return key.digest(head, ep, ctr, payload)[: self.tag_len]
 
     # -- the counter file --------------------------------------------------------

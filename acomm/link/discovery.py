@@ -4,13 +4,13 @@
 # advert periods becomes unavailable.
 #
 # Advert payload, 2 bytes: node id (0..254; 256..65534 take 3 bytes, as in
-# acomm.frame's put_addr), then the sender's advert period in units of 4 s
+# acomm.frame's addr_bytes), then the sender's advert period in units of 4 s
 # (1..255, so up to 17 minutes), which tells listeners how long silence may
 # last before the node counts as lost.
 
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import DecodeError
-from ..frame import addr_bytes, get_addr
+from ..frame import get_addr
 from ..prng import Prng
 
 # acomm.events' codes, as private constants: inlined, they cost a board no
@@ -30,7 +30,7 @@ def encode_advert(node_id, period_ms):
         units = 1
     elif units > 255:
         units = 255
-    return addr_bytes(node_id) + bytes((units,))
+    return bytes((node_id, units) if node_id < 255 else (255, node_id >> 8, node_id & 0xFF, units))  # acomm.frame.addr_bytes
 
 
 def decode_advert(data):

@@ -51,7 +51,6 @@ from . import segment as sg
 from .arq import Outgoing, Reassembly
 from ..compat import const, ticks_add, ticks_diff
 from ..errors import AcommError, DecodeError, StoreFull
-from ..frame import addr_bytes
 from .packetstore import PacketStore, key_of
 from .route import MEDIUM_ALL, Router
 
@@ -111,6 +110,17 @@ class _Packet:
 # every field, for a copy of a packet (MEDIUM_ALL)
 _FIELDS = ("origin", "final", "pid", "prio", "expiry", "body", "compressed", "medium", "out", "link", "hop",
            "inflight", "polling", "polled", "timer", "relayed", "misses", "wait", "group", "chunks", "size", "key")
+
+
+def _memory(t, origin, pid):
+    # -> (transport t's entries for origin's packets done there, an entry's
+    # size, the start of pid's entry): 5 bytes each, origins of 256 or more 7
+    # (the origin in 3). A function, not a method: one entry less in the class dict of every board
+    if origin < 255:
+        return t._done, 5, bytes((origin, pid >> 8, pid & 0xFF))
+    if t._done_wide is None:
+        t._done_wide = bytearray()
+    return t._done_wide, 7, bytes((255, origin >> 8, origin & 0xFF, pid >> 8, pid & 0xFF))  # as acomm.frame.addr_bytes
 
 
 def _wall_default():
@@ -807,19 +817,10 @@ class Transport:
         r.header = None
         return True
 
-    def _memory(self, origin, pid):
-        # -> (the entries for origin's packets, an entry's size, the start of
-        # pid's): 5 bytes each, origins of 256 or more 7 (the origin in 3)
-        if origin < 255:
-            return self._done, 5, bytes((origin, pid >> 8, pid & 0xFF))
-        if self._done_wide is None:
-            self._done_wide = bytearray()
-        return self._done_wide, 7, addr_bytes(origin) + bytes((pid >> 8, pid & 0xFF))
-
     def _is_done(self, origin, pid):
         # whether (origin, pid) is among the entries remembered: a hit must
         # start on an entry's boundary (the pattern can straddle two)
-        d, w, pat = self._memory(origin, pid)
+        d, w, pat = _memory(self, origin, pid)
         i = d.find(pat)
         while i >= 0 and i % w:
             i = d.find(pat, i + 1)
@@ -832,7 +833,7 @@ class Transport:
         # soonest: an expired one first (its copies are gone, relays drop
         # them), else the earliest, counted as done_forgotten (a copy of
         # it could then be delivered twice)
-        d, w, pat = self._memory(origin, pid)
+        d, w, pat = _memory(self, origin, pid)
         now_min = self.wall() // 60
         if len(d) >= w * _DONE_MEMORY:
             j = 0

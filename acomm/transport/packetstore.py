@@ -11,7 +11,7 @@
 # one (a cut in the middle of a put or a delete).
 #
 # Chunk 0 header, 11 bytes: origin, final destination (node ids, 3 bytes
-# each from 256 up, as acomm.frame.put_addr writes them), pid (2, big-endian),
+# each from 256 up, as acomm.frame.addr_bytes writes them), pid (2, big-endian),
 # priority, flags (bit 0: body compressed; bit 1: a medium name follows),
 # expiry (4, wall-clock seconds, big-endian), chunk count; then the medium
 # (a length byte and the name) when flagged; then body bytes.
@@ -38,7 +38,7 @@
 
 from ..compat import const
 from .. import errors  # one name in this module's dict, not two (the buoy's heap)
-from ..frame import addr_bytes, get_addr
+from ..frame import get_addr
 
 _HDR = const(11)
 _META = const(0xFFFFFF)
@@ -179,7 +179,10 @@ class PacketStore:
         if p.origin < 255 and p.final < 255:
             head = bytes((p.origin, p.final)) + head
         else:
-            head = addr_bytes(p.origin) + addr_bytes(p.final) + head
+            ids = bytearray()
+            for a in (p.origin, p.final):
+                ids.extend((a,) if a < 255 else (255, a >> 8, a & 0xFF))  # acomm.frame.addr_bytes
+            head = bytes(ids) + head
             if p.origin > 254 and p.key is None:
                 s = p.pid % 0xFFFC
                 while self.store.length(_WIDE_KEYS | s) is not None:

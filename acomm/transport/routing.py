@@ -19,7 +19,7 @@
 #           count: the hops so far for a flood, a request or a reply, the
 #           destinations for an error
 #   Node ids (origin, dest) are one byte, and three for an id of 256 or
-#   more (0xFF and 2 bytes, acomm.frame.put_addr); the sizes below are for
+#   more (0xFF and 2 bytes, acomm.frame.addr_bytes); the sizes below are for
 #   one-byte ids.
 #   request (flooded), 10 bytes:
 #     kind|hops  id  origin  origin_seq(2)  dest  dest_seq(2)  cost(2)

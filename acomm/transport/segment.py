@@ -30,14 +30,14 @@
 #   pid      2 bytes           the origin's packet id (duplicate suppression)
 #   length   1..3 bytes        body length, 7 bits per byte, high bit = more
 #   R only:  origin, final destination (node ids: one byte each, three
-#            for an id of 256 or more, acomm.frame.put_addr), priority
+#            for an id of 256 or more, acomm.frame.addr_bytes), priority
 #            (1..16, one byte), lifespan left in seconds (2 bytes, saturating)
 # A packet sent straight to its neighbour costs 4 bytes (length < 128) plus
 # 1 per fragment; docs/wire-format.md has the examples.
 
 from ..compat import const
 from ..errors import DecodeError, EncodeError
-from ..frame import addr_bytes, get_addr, is_addr
+from ..frame import get_addr
 
 FRAG_HEADER = const(1)
 MAX_INDEX = const(4095)
@@ -164,13 +164,11 @@ def packet_header(pid, length, compressed=False, relay=None):
             break
     if relay is not None:
         origin, final, prio, life = relay
-        if not (is_addr(origin) and is_addr(final) and 1 <= prio <= 16):
+        if not (0 <= origin <= 65534 and 0 <= final <= 65534 and 255 not in (origin, final) and 1 <= prio <= 16):
             raise EncodeError("relay fields out of range: %r" % (relay,))
         life = 0 if life < 0 else (_MAX_LIFE_S if life > _MAX_LIFE_S else int(life))
-        if origin > 254 or final > 254:
-            out.extend(addr_bytes(origin) + addr_bytes(final))
-        else:
-            out.extend((origin, final))
+        for a in (origin, final):
+            out.extend((a,) if a < 255 else (255, a >> 8, a & 0xFF))  # acomm.frame.addr_bytes
         out.extend((prio, life >> 8, life & 0xFF))
     return bytes(out)
 

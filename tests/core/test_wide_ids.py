@@ -1,5 +1,5 @@
 # Node ids of 256 and more (up to 65534): one byte on the water for 0..254,
-# and for the others 0xFF then the id in 2 bytes (acomm.frame.put_addr), in
+# and for the others 0xFF then the id in 2 bytes (acomm.frame.addr_bytes), in
 # the frame header, adverts, relay fields, route control and floods, and in
 # the store's records and the memory of delivered packets. Here a routed
 # chain of such nodes on a packet modem that carries raw frames, and each
@@ -136,3 +136,5 @@ def test_adverts_relay_fields_and_sealing_with_wide_ids():
     raises(AuthError, auth.seal, fr.DATA, 300, 2, b"x")
     raises(AuthError, auth.seal, fr.DATA, 2, 300, b"x")
     assert auth.seal(fr.DATA, 44, 2, b"x")
+    raises(AuthError, auth.ack_tag, 300, 2, 1, 5)
+    raises(AuthError, auth.ack_tag, 2, 300, 1, 5)

@@ -42,7 +42,7 @@ from acomm_sim.routednet import MODES, RoutedNet
 PER_RUNTIME = ()
 SEEDS = (1, 2, 3, 4, 5)
 MINUTES = {"chain": 40, "grid": 40, "random": 40, "partition": 40, "large": 20}
-LARGE_NODES = (256, 1024)  # node ids from 256 up take 3 bytes on the water (acomm.frame.put_addr)
+LARGE_NODES = (256, 1024)  # node ids from 256 up take 3 bytes on the water (acomm.frame.addr_bytes)
 
 
 def _quantile(xs, q):
