@@ -196,12 +196,8 @@ def encode_raw(frame):
 
 def check_raw(data):
     """Validates version, length, addresses and CRC of a raw frame without
-    building a Frame; returns the header length. Raises DecodeError / CRCError."""
-    return _checked(data)[2]
-
-
-def _checked(data):
-    # check_raw's checks; -> (source, wire destination, header length)
+    building a Frame; returns the header length. Raises DecodeError / CRCError.
+    Allocates nothing: it runs on every frame a board hears."""
     n = len(data)
     if n < RAW_OVERHEAD_SHORT:
         raise DecodeError("raw frame of %d bytes is shorter than the minimum 5" % n)
@@ -214,29 +210,49 @@ def _checked(data):
     got = crc16(memoryview(data)[: n - 2])
     if want != got:
         raise CRCError("frame CRC 0x%04x does not match computed 0x%04x" % (want, got))
-    # -> (source, wire destination, header length); the addresses end before the CRC
     if not b0 & 0x20:
-        return data[2] & 0x0F, data[2] >> 4, 3
-    wdst, i = get_addr(data, 2, n - 2)
-    src, i = get_addr(data, i, n - 2)
-    if wdst <= _SHORT_MAX_ADDR and src <= _SHORT_MAX_ADDR:
+        return 3
+    # two node ids (get_addr's rules), ending before the CRC
+    i = 2
+    for _ in (0, 1):
+        if i >= n - 2:
+            raise DecodeError("node id missing")
+        if data[i] == _ESC:
+            a = (data[i + 1] << 8) | data[i + 2] if i + 3 <= n - 2 else 0
+            if a <= BROADCAST or a > MAX_ADDR:
+                raise DecodeError("escaped node id cut short or %d" % a)
+            i += 3
+        else:
+            i += 1
+    if i == 4 and data[2] <= _SHORT_MAX_ADDR and data[3] <= _SHORT_MAX_ADDR:
         # the encoder always uses the short form for these; a wide one is
         # not ours (and would give two encodings for one frame)
         raise DecodeError("wide header for short addresses")
-    return src, wdst, i
+    return i
+
+
+def _addresses(data, hlen):
+    # (source, wire destination) of a raw frame check_raw passed
+    if hlen == 3:
+        return data[2] & 0x0F, data[2] >> 4
+    if hlen == 4:
+        return data[3], data[2]
+    wdst, i = get_addr(data, 2)
+    return get_addr(data, i)[0], wdst
 
 
 def raw_addresses(data):
     """(source, destination) node ids of a raw frame, destination BROADCAST
     for a broadcast, after check_raw's checks and without copying the
     payload: the IP links route and learn senders by them."""
-    src, wdst, _ = _checked(data)
+    src, wdst = _addresses(data, check_raw(data))
     return src, (BROADCAST if wdst == src else wdst)
 
 
 def decode_raw(data):
     """The Frame in raw bytes. Raises DecodeError / CRCError."""
-    src, wdst, hlen = _checked(data)
+    hlen = check_raw(data)
+    src, wdst = _addresses(data, hlen)
     b0 = data[0]
     b1 = data[1]
     dst = BROADCAST if wdst == src else wdst

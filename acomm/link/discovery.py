@@ -35,7 +35,10 @@ def encode_advert(node_id, period_ms):
 
 def decode_advert(data):
     """-> (node id, period in ms). Raises DecodeError."""
-    node_id, i = get_addr(data, 0)
+    if len(data) == 2 and data[0] != 255:
+        node_id, i = data[0], 1  # no get_addr: its tuple on every advert heard
+    else:
+        node_id, i = get_addr(data, 0)
     if len(data) != i + 1:
         raise DecodeError("advert of %d bytes, expected %d" % (len(data), i + 1))
     if data[i] == 0:

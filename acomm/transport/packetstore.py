@@ -281,11 +281,14 @@ class PacketStore:
             return None
         s = Stored()
         s.key = k
-        try:
-            s.origin, at = get_addr(rec, 0)
-            s.final, at = get_addr(rec, at)
-        except errors.DecodeError:
-            return None
+        if rec[0] != 255 and rec[1] != 255:
+            s.origin, s.final, at = rec[0], rec[1], 2
+        else:
+            try:
+                s.origin, at = get_addr(rec, 0)
+                s.final, at = get_addr(rec, at)
+            except errors.DecodeError:
+                return None
         if len(rec) < at + 9:
             return None
         s.pid, s.prio, flags = (rec[at] << 8) | rec[at + 1], rec[at + 2], rec[at + 3]

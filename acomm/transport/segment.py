@@ -204,8 +204,12 @@ def decode_packet_header(data):
     h.length = length
     h.relay = None
     if f & _F_RELAY:
-        origin, i = get_addr(data, i)
-        final, i = get_addr(data, i)
+        if i + 2 <= n and data[i] != 255 and data[i + 1] != 255:
+            origin, final = data[i], data[i + 1]  # one-byte ids: no get_addr tuples
+            i += 2
+        else:
+            origin, i = get_addr(data, i)
+            final, i = get_addr(data, i)
         if i + 3 > n:
             raise DecodeError("relay fields cut short")
         prio = data[i]
