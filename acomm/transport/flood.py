@@ -59,6 +59,8 @@ def encode_flood(origin, mid, hops, data):
         if not isinstance(v, int) or not 0 <= v <= top or (v == 255 and top == 65534):
             raise EncodeError("%s %r outside 0..%d" % (what, v, top))
     # kind 0: the top bits of hops stay clear
+    if origin < 255:
+        return bytes((hops, origin, mid)) + bytes(data)
     return bytes((hops,)) + addr_bytes(origin) + bytes((mid,)) + bytes(data)
 
 
@@ -67,7 +69,10 @@ def decode_flood(data):
     length or the broadcast id as its origin."""
     if not data or data[0] >> 6:
         raise DecodeError("not a flood")
-    origin, i = get_addr(data, 1)
+    if len(data) > 1 and data[1] != 255:
+        origin, i = data[1], 2
+    else:
+        origin, i = get_addr(data, 1)
     if not i + 2 <= len(data) <= i + 1 + MAX_DATA:
         raise DecodeError("flood of %d bytes" % len(data))
     return ("flood", origin, data[i], data[0], bytes(data[i + 1 :]))

@@ -170,8 +170,12 @@ def encode_request(rid, origin, origin_seq, dest, dest_seq, hops, cost):
     o = _chk(origin_seq, 0xFFFE, "origin seq")
     d = _chk(dest_seq, 0xFFFF, "destination seq")
     c = _chk(cost, -1, "cost")
-    return (bytes((_REQUEST << 6 | _chk(hops, MAX_HOPS, "count"), _chk(rid, 255, "request id"))) + _id(origin, "origin")
-            + bytes((o >> 8, o & 0xFF)) + _id(dest, "destination") + bytes((d >> 8, d & 0xFF, c >> 8, c & 0xFF)))
+    k = _REQUEST << 6 | _chk(hops, MAX_HOPS, "count")
+    if _chk(origin, 65534, "origin") < 255 and _chk(dest, 65534, "destination") < 255:  # one bytes object: relays send many
+        return bytes((k, _chk(rid, 255, "request id"), _chk(origin, 254, "origin"), o >> 8, o & 0xFF,
+                      _chk(dest, 254, "destination"), d >> 8, d & 0xFF, c >> 8, c & 0xFF))
+    return (bytes((k, _chk(rid, 255, "request id"))) + _id(origin, "origin") + bytes((o >> 8, o & 0xFF))
+            + _id(dest, "destination") + bytes((d >> 8, d & 0xFF, c >> 8, c & 0xFF)))
 
 
 def encode_reply(dest, dest_seq, origin, hops, cost, lifetime_ms):
@@ -180,8 +184,11 @@ def encode_reply(dest, dest_seq, origin, hops, cost, lifetime_ms):
     units = (lifetime_ms + LIFETIME_UNIT_MS - 1) // LIFETIME_UNIT_MS
     s = _chk(dest_seq, 0xFFFE, "destination seq")
     c = _chk(cost, -1, "cost")
-    return (bytes((_REPLY << 6 | _chk(hops, MAX_HOPS, "count"),)) + _id(dest, "destination") + bytes((s >> 8, s & 0xFF))
-            + _id(origin, "origin") + bytes((c >> 8, c & 0xFF, 1 if units < 1 else (255 if units > 255 else units))))
+    k = _REPLY << 6 | _chk(hops, MAX_HOPS, "count")
+    u = 1 if units < 1 else (255 if units > 255 else units)
+    if _chk(origin, 65534, "origin") < 255 and _chk(dest, 65534, "destination") < 255:
+        return bytes((k, _chk(dest, 254, "destination"), s >> 8, s & 0xFF, _chk(origin, 254, "origin"), c >> 8, c & 0xFF, u))
+    return bytes((k,)) + _id(dest, "destination") + bytes((s >> 8, s & 0xFF)) + _id(origin, "origin") + bytes((c >> 8, c & 0xFF, u))
 
 
 def encode_error(lost):
@@ -213,8 +220,13 @@ def decode(data):
         # request: kind|hops id origin seq(2) dest seq(2) cost(2); reply: kind|hops dest seq(2)
         # origin cost(2) lifetime; an id is 1 byte or 3 (get_addr raises when it is cut short)
         q = kind == _REQUEST
-        a, i = get_addr(data, 2 if q else 1)  # request: origin; reply: dest
-        b, j = get_addr(data, i + 2)  # and the other
+        i = 2 if q else 1
+        if len(data) == (10 if q else 8) and data[i] != 255 and data[i + 3] != 255:
+            a, b, j = data[i], data[i + 3], i + 4  # one-byte ids: no get_addr tuples
+            i += 1
+        else:
+            a, i = get_addr(data, i)  # request: origin; reply: dest
+            b, j = get_addr(data, i + 2)  # and the other
         if len(data) != j + (4 if q else 3):
             raise DecodeError("route %s of %d bytes" % ("request" if q else "reply", len(data)))
         s = (data[i] << 8) | data[i + 1]  # request: the origin's; reply: the destination's

@@ -167,8 +167,11 @@ def packet_header(pid, length, compressed=False, relay=None):
         if not (0 <= origin <= 65534 and 0 <= final <= 65534 and 255 not in (origin, final) and 1 <= prio <= 16):
             raise EncodeError("relay fields out of range: %r" % (relay,))
         life = 0 if life < 0 else (_MAX_LIFE_S if life > _MAX_LIFE_S else int(life))
-        for a in (origin, final):
-            out.extend((a,) if a < 255 else (255, a >> 8, a & 0xFF))  # acomm.frame.addr_bytes
+        if origin < 255 and final < 255:
+            out.extend((origin, final))
+        else:
+            for a in (origin, final):
+                out.extend((a,) if a < 255 else (255, a >> 8, a & 0xFF))  # acomm.frame.addr_bytes
         out.extend((prio, life >> 8, life & 0xFF))
     return bytes(out)
 
