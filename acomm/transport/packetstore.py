@@ -163,7 +163,7 @@ class PacketStore:
         # those from origins of 256 or more, 7 bytes each (the origin in 3)
         self.store.put(_DONE5, bytes(done))  # the room for it is kept (_META_ROOM)
         if wide:
-            self.store.put(_DONE7, bytes(wide))  # its room is not kept: a node of such a network has a larger store
+            self.store.put(_DONE7, bytes(wide))  # no room kept for it (_META_ROOM is sized for a board): a refusal costs the memory only
 
     def put(self, p):
         # raises StoreFull (nothing of the packet stays then)

@@ -534,7 +534,7 @@ def test_open_store_on_a_flash_that_cannot_hold_it_gives_a_store_that_takes_noth
         st.put(1, b"x")
 
     class P:
-        size, prio, medium = 10, 1, None
+        size, prio, medium, origin, final = 10, 1, None, 2, 1
 
     assert not PacketStore(st).room(P())  # not even an urgent packet
     ok = open_store({"path": str(tmp_path / "ok" / "acomm.store"), "capacity": 65536, "max_record": 256},
