@@ -171,11 +171,10 @@ def encode_request(rid, origin, origin_seq, dest, dest_seq, hops, cost):
     d = _chk(dest_seq, 0xFFFF, "destination seq")
     c = _chk(cost, -1, "cost")
     k = _REQUEST << 6 | _chk(hops, MAX_HOPS, "count")
+    r = _chk(rid, 255, "request id")
     if _chk(origin, 65534, "origin") < 255 and _chk(dest, 65534, "destination") < 255:  # one bytes object: relays send many
-        return bytes((k, _chk(rid, 255, "request id"), _chk(origin, 254, "origin"), o >> 8, o & 0xFF,
-                      _chk(dest, 254, "destination"), d >> 8, d & 0xFF, c >> 8, c & 0xFF))
-    return (bytes((k, _chk(rid, 255, "request id"))) + _id(origin, "origin") + bytes((o >> 8, o & 0xFF))
-            + _id(dest, "destination") + bytes((d >> 8, d & 0xFF, c >> 8, c & 0xFF)))
+        return bytes((k, r, origin, o >> 8, o & 0xFF, dest, d >> 8, d & 0xFF, c >> 8, c & 0xFF))
+    return bytes((k, r)) + _id(origin, "origin") + bytes((o >> 8, o & 0xFF)) + _id(dest, "destination") + bytes((d >> 8, d & 0xFF, c >> 8, c & 0xFF))
 
 
 def encode_reply(dest, dest_seq, origin, hops, cost, lifetime_ms):
@@ -187,7 +186,7 @@ def encode_reply(dest, dest_seq, origin, hops, cost, lifetime_ms):
     k = _REPLY << 6 | _chk(hops, MAX_HOPS, "count")
     u = 1 if units < 1 else (255 if units > 255 else units)
     if _chk(origin, 65534, "origin") < 255 and _chk(dest, 65534, "destination") < 255:
-        return bytes((k, _chk(dest, 254, "destination"), s >> 8, s & 0xFF, _chk(origin, 254, "origin"), c >> 8, c & 0xFF, u))
+        return bytes((k, dest, s >> 8, s & 0xFF, origin, c >> 8, c & 0xFF, u))
     return bytes((k,)) + _id(dest, "destination") + bytes((s >> 8, s & 0xFF)) + _id(origin, "origin") + bytes((c >> 8, c & 0xFF, u))
 
 
@@ -230,7 +229,8 @@ def decode(data):
         if len(data) != j + (4 if q else 3):
             raise DecodeError("route %s of %d bytes" % ("request" if q else "reply", len(data)))
         s = (data[i] << 8) | data[i + 1]  # request: the origin's; reply: the destination's
-        cost = (data[j + 2 if q else j] << 8) | data[j + 3 if q else j + 1]
+        c = j + 2 if q else j  # the cost: after the request's destination seq, or the reply's origin
+        cost = (data[c] << 8) | data[c + 1]
         if s == UNKNOWN_SEQ or cost > MAX_COST or (not q and data[j + 2] == 0):
             raise DecodeError("route control with a reserved sequence number or cost, or no lifetime")
         if q:

@@ -77,6 +77,7 @@ def test_a_relay_keeps_a_wide_origins_packet_through_a_restart():
     assert w.run(400000, until=lambda: relay.t.stats["relayed"] >= 1)
     relay.node.transport = None
     t2 = Transport.of(relay.node, store=stores[1], wall=_wall(w), routing={"search_ms": 30000})
+    assert [(p.origin, p.final) for p in t2._out] == [(300, 1000)]  # back from the store, not yet sent on
     assert w.run(600000, until=lambda: _got(last)), t2.stats
     assert _got(last) == [("n300", b"custody")]
 
@@ -98,7 +99,7 @@ def test_the_store_and_the_done_memory_tell_300_from_44():
     got = dict((s.origin, s) for s in PacketStore(st).recover())
     assert sorted(got) == [44, 300] and got[300].final == 65534 and got[300].key == key_of(a)
     assert PacketStore(st).body(key_of(a)) == b"x" * 20
-    # a second packet from 300 with the same pid low bits takes another slot
+    # a packet from 556 (low byte 44 too) with the same pid takes another slot
     c = P()
     c.origin, c.final, c.pid, c.prio, c.expiry, c.size = 556, 2, 7, 5, 2000000000, 20
     ps.put(c)
