@@ -760,6 +760,9 @@ class Transport:
             body = blob[h.size :]
             if h.relay is not None:
                 origin, final, prio, life = h.relay
+                # the life left now, not when the previous hop began the
+                # transfer: else each hop's transfer time adds to the lifespan
+                life -= ticks_diff(now, r.born) // 1000
                 if self.router.routing is not None and origin != self.node_id:
                     self.router.routing.learn(now, link, origin, src)  # the way back, for free
             else:

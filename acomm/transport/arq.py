@@ -179,6 +179,10 @@ class Reassembly:
         self.max_bytes = max_bytes
         self.frags = {}
         self.touched = now
+        # when its first fragment came: a relay takes the transfer's time
+        # off the life the header gave (that life was counted when the
+        # previous hop built the header, before it sent a fragment)
+        self.born = now
 
     def add(self, index, payload, now):
         # Raises DecodeError for a fragment that contradicts the packet.

@@ -61,6 +61,21 @@ def test_a_relay_tells_its_own_listeners_of_a_packet_that_expired_in_its_custody
     assert c.node.transport.stats["expired"] == 1
 
 
+def test_a_relay_counts_the_lifespan_from_the_origin_not_from_the_end_of_its_hop():
+    # a 600-byte packet takes minutes to cross the first hop: the relay's copy expires when
+    # the origin's would have, not a whole transfer later (each hop would add its own)
+    w, a, b, c, ta = net(relay=True)
+    t0 = w.now() // 1000
+    pid = ta.send(w.now(), "buoy", Prng(11).bytes(600), 3600, 5)
+    assert w.run(1200000, until=lambda: TRANSMITTED in statuses(a, pid))
+    took = w.now() // 1000 - t0
+    held = [p for p in c.node.transport._out if p.pid == pid]
+    assert took > 60 and len(held) == 1
+    # what is left over: whole seconds rounded, and the first fragment's own time on its way
+    # (the relay counts from its arrival); without the count it was the whole transfer (63 s)
+    assert -2 <= held[0].expiry - (t0 + 3600) <= 8
+
+
 def test_a_packet_a_routing_loop_brings_back_to_its_origin_gets_no_second_status():
     # the auv's route to the buoy goes back through the diver (a loop, as stale learned routes
     # make after a restart): the diver hears `transmitted` when the auv takes custody, and when
