@@ -486,6 +486,14 @@ class Transport:
             # keeps its own expiry here (a lifespan of weeks, or an expiry
             # from another epoch, would have the link refuse every fragment)
             life = _MAX_LIFESPAN_MS // 1000
+        if not index and len(data) > 1 and data[1] & 0x80:
+            # fragment 0 (its index byte, then the packet header) of a packet with relay fields
+            # (flag R): their life, the header's last 2 bytes, is the one left now, stamped again
+            # each time fragment 0 goes, so that the relay, counting from its arrival, misses only
+            # this copy's wait and flight, not the rounds lost before it
+            k = 1 + sg.decode_packet_header(data[1:]).size
+            v = life if life < 0xFFFF else 0xFFFF
+            data = data[: k - 2] + bytes((v >> 8, v & 0xFF)) + data[k:]
         poll = sg.is_poll(head)
         # confirmed by the modem's own delivery report? (acomm.transport.delivery)
         rep = p.out.reports and p.out.report_wanted(len(data), poll)
@@ -760,8 +768,8 @@ class Transport:
             body = blob[h.size :]
             if h.relay is not None:
                 origin, final, prio, life = h.relay
-                # the life left now, not when the previous hop began the
-                # transfer: else each hop's transfer time adds to the lifespan
+                # the life left now, not when fragment 0 came: else each hop's
+                # transfer time adds to the lifespan
                 life -= ticks_diff(now, r.born) // 1000
                 if self.router.routing is not None and origin != self.node_id:
                     self.router.routing.learn(now, link, origin, src)  # the way back, for free

@@ -179,10 +179,6 @@ class Reassembly:
         self.max_bytes = max_bytes
         self.frags = {}
         self.touched = now
-        # when its first fragment came: a relay takes the transfer's time
-        # off the life the header gave (that life was counted when the
-        # previous hop built the header, before it sent a fragment)
-        self.born = now
 
     def add(self, index, payload, now):
         # Raises DecodeError for a fragment that contradicts the packet.
@@ -202,6 +198,10 @@ class Reassembly:
         while self._base in self.frags:
             self._base += 1
         if index == 0:
+            # when the packet's header came: a relay takes the rest of the
+            # transfer's time off the life that header gave (stamped when the
+            # sender queued this copy of fragment 0)
+            self.born = now
             h = sg.decode_packet_header(payload)
             total = h.size + h.length
             if total > self.max_bytes:

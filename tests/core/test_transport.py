@@ -76,6 +76,23 @@ def test_a_relay_counts_the_lifespan_from_the_origin_not_from_the_end_of_its_hop
     assert -2 <= held[0].expiry - (t0 + 3600) <= 8
 
 
+def test_fragment_0_sent_again_carries_the_life_left_then_not_the_life_at_the_start():
+    # the relay is out of the origin's reach for 2 minutes after the send: the origin's
+    # fragment 0 is lost and sent again, each time with the life left then, so the relay's
+    # copy still expires when the origin's would have
+    w, a, b, c, ta = net(relay=True)
+    w.channel.set_position(3, 50000.0, 0.0, 0.0)
+    t0 = w.now() // 1000
+    pid = ta.send(w.now(), "buoy", Prng(12).bytes(20), 3600, 5)
+    w.run(120000)
+    assert not statuses(a, pid)[1:]  # nothing got through meanwhile
+    w.channel.set_position(3, 150.0, 0.0, 5.0)
+    assert w.run(1200000, until=lambda: TRANSMITTED in statuses(a, pid))
+    held = [p for p in c.node.transport._out if p.pid == pid]
+    assert w.now() // 1000 - t0 > 120 and len(held) == 1
+    assert -2 <= held[0].expiry - (t0 + 3600) <= 8, held[0].expiry - (t0 + 3600)
+
+
 def test_a_packet_a_routing_loop_brings_back_to_its_origin_gets_no_second_status():
     # the auv's route to the buoy goes back through the diver (a loop, as stale learned routes
     # make after a restart): the diver hears `transmitted` when the auv takes custody, and when
