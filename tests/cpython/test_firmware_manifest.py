@@ -83,3 +83,71 @@ def test_the_buoy_firmware_freezes_its_import_closure_and_nothing_else_of_acomm(
     assert ours == closure, (sorted(ours - closure), sorted(closure - ours))
     # the buoy never imports the IMC gateway; the full image does
     assert not any(n.startswith("acomm/imc/") for n in ours)
+
+
+def _pool_strings(product):
+    # the strings of a product's frozen qstr pool (frozen_content.c) and of its own pool
+    # (genhdr/qstrdefs.generated.h): every name its firmware knows without the heap
+    import ast
+
+    build = os.path.join(WORK, product, "build")
+    with open(os.path.join(build, "frozen_content.c")) as f:
+        text = f.read()
+    pool = text[text.index("mp_qstr_frozen_const_pool = {") :]
+    pool = pool[pool.index("{", pool.index("mp_qstr_frozen_const_lengths")) : pool.index("};")]
+    known = set(ast.literal_eval("b" + m).decode() for m in re.findall(r'^\s*("(?:[^"\\]|\\.)*"),$', pool, re.M))
+    with open(os.path.join(build, "genhdr", "qstrdefs.generated.h")) as f:
+        for m in re.finditer(r'^QDEF\d?\(MP_QSTR_\w*, \d+, \d+, ("(?:[^"\\]|\\.)*")\)', f.read(), re.M):
+            known.add(ast.literal_eval("b" + m.group(1)).decode())
+    return known
+
+
+def test_the_names_firmware_knows_every_name_of_the_buoys_romfs_modules(tmp_path):
+    # cm3-names (tools/qstrnames.py): the buoy's .mpy files as `acomm flash` compiles them
+    # for the ROMFS image use no name its firmware lacks, and it freezes no module of acomm
+    frozen = _frozen("cm3-names")
+    assert "acomm_names.py" in frozen and not any(n.split("/")[0] in ("acomm", "acomm_mp") for n in frozen)
+    for p in (os.path.join(ROOT, "ports", "cpython"), os.path.join(ROOT, "tools")):
+        if p not in sys.path:
+            sys.path.insert(0, p)
+    import qstrnames
+    from acomm_cpython.board import boardfiles
+
+    known = _pool_strings("cm3-names")
+    used = set()
+    for e in boardfiles.plan(boardfiles.board_path("buoy_pico"), arch="armv7m", stage_dir=str(tmp_path)):
+        if e.device.endswith(".mpy"):
+            with open(e.host, "rb") as f:
+                used.update(qstrnames.mpy_qstrs(f.read()))
+    assert len(used) > 1000
+    assert not sorted(used - known), sorted(used - known)[:20]
+    # the stock harness firmware lacks most of them: what the names save
+    assert len(used - _pool_strings("cm3-harness")) > 1000
+
+
+def test_the_names_module_names_what_it_can_and_leaves_out_what_it_cannot(tmp_path):
+    for p in (os.path.join(ROOT, "tools"),):
+        if p not in sys.path:
+            sys.path.insert(0, p)
+    import qstrnames
+
+    mc = os.path.join(ROOT, "build", "firmware", "mpy-cross")
+    if not os.path.exists(mc):
+        pytest.skip("build/firmware/mpy-cross not built: run `make firmware`")
+    names = ["depth_m", "x%d", "acomm.transport.routing", "lifespan over", "class", "_private"]
+    src = tmp_path / "names.py"
+    src.write_text(qstrnames.names_module(names, per_def=1))
+    out = tmp_path / "names.mpy"
+    import subprocess
+
+    subprocess.run([mc, "-o", str(out), str(src)], check=True)
+    got = set(qstrnames.mpy_qstrs(out.read_bytes()))
+    # a keyword cannot be an argument: as a short string it is interned all the same
+    assert {"depth_m", "x%d", "acomm.transport.routing", "_private", "class"} <= got
+    # a long string is frozen as a string object, not a name
+    assert "lifespan over" not in got
+    # and a board manifest's files come with the module names acomm flash gives them
+    files = qstrnames.manifest_files(os.path.join(ROOT, "ports", "micropython", "manifests", "buoy_pico.py"))
+    assert (os.path.join(ROOT, "acomm", "transport", "routing.py"), "acomm.transport.routing") in [
+        (os.path.normpath(p), n) for p, n in files]
+    assert ("acomm.transport",) == tuple(n for p, n in files if p.endswith(os.path.join("transport", "__init__.py")))

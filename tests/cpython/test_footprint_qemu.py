@@ -44,6 +44,21 @@ def test_a_minute_from_a_romfs_image_at_the_boards_partition(tmp_path):
     assert rom["code"] + 32 * 1024 < lfs["code"], (rom["code"], lfs["code"])
 
 
+def test_a_firmware_that_knows_the_buoys_names_imports_its_romfs_modules_in_less_heap(tmp_path):
+    # cm3-names freezes the names the buoy's modules use (tools/qstrnames.py): the same
+    # ROMFS image imports without adding them to the heap's qstr pools (about 1,700 names:
+    # 8 KiB in the bench), and the minute runs as on the stock firmware
+    harness, names = firmware("cm3-harness"), firmware("cm3-names")
+    if harness is None or names is None:
+        pytest.skip("build/firmware/cm3-harness.elf or cm3-names.elf not built")
+    st = fr.Staged(str(tmp_path), "armv7m")
+    stock = fr.run_qemu(harness, 128 * 1024, rom=st.rom())
+    known = fr.run_qemu(names, 128 * 1024, rom=st.rom())
+    assert stock["fail"] is None and known["fail"] is None, known["text"][-2000:]
+    assert known["relayed"] == 1 and known["tx_frames"] > 0 and known["rx_frames"] > 0
+    assert known["code"] + 4096 < stock["code"], (known["code"], stock["code"])
+
+
 def test_the_routing_minute_exercises_the_buoys_router_and_its_figure_runs():
     # the buoy's config with routing on: the diver's route requests reach
     # the buoy's finder, which answers or rebroadcasts them and learns the
@@ -75,3 +90,33 @@ def test_the_routing_group_emits_its_figure_and_the_difference(monkeypatch):
     assert got["heap_min_frozen_cortex_m_routing_bytes"] == 43008
     assert got["heap_routing_extra_frozen_cortex_m_bytes"] == 2048
     assert True in calls and False in calls
+
+
+def test_the_names_group_emits_both_figures_on_the_names_firmware(monkeypatch):
+    from acomm_cpython.bench.workloads import footprint_workload as fw
+
+    seen = []
+
+    def fake(elf, heap, routing=False, rom=None, **kw):
+        # a ROMFS board whose minute needs 56 KiB, 5 KiB more with routing
+        seen.append((elf, rom, routing))
+        need = 57344 + (5120 if routing else 0)
+        return {"fail": None if heap >= need else "MemoryError", "after_build": 50000, "code": 40000, "peak": 90000}
+
+    class FakeStaged:
+        def __init__(self, tmp, arch):
+            pass
+
+        def rom(self):
+            return "rom.img"
+
+    monkeypatch.setattr(fw, "run_qemu", fake)
+    monkeypatch.setattr(fw, "Staged", FakeStaged)
+    monkeypatch.setattr(fw, "_fw", lambda name: name + ".elf")
+    got = {}
+    fw._group("romfs_names_cortex_m", lambda n, v, u: got.__setitem__(n, v), {"tmp": None})
+    assert got["heap_min_romfs_names_cortex_m_bytes"] == 57344
+    assert got["heap_min_romfs_names_cortex_m_routing_bytes"] == 62464
+    assert got["heap_after_build_romfs_names_cortex_m_routing_bytes"] == 50000
+    assert set(e for e, _, _ in seen) == {"cm3-names.elf"} and set(r for _, r, _ in seen) == {"rom.img"}
+    assert {False, True} == set(x for _, _, x in seen)

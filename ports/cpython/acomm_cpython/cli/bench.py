@@ -10,8 +10,9 @@ from ..bench import table as bench
 def add_arguments(b):
     b.add_argument("name", help="core, queue, discovery, ..., compare, or all (all but compare)")
     b.add_argument("--json", action="store_true", help="one JSON object per line")
-    b.add_argument("--only", help="footprint: one group of figures (frozen_cortex_m, romfs_cortex_m, mpy_cortex_m, "
-                                  "frozen_i386, romfs_i386, mpy_i386, flash_text, unix64)")
+    b.add_argument("--only", help="footprint: one group of figures (frozen_cortex_m, romfs_cortex_m, "
+                                  "romfs_names_cortex_m, mpy_cortex_m, frozen_i386, romfs_i386, mpy_i386, "
+                                  "flash_text, unix64, ...: footprint_workload.GROUPS)")
     b.add_argument("--open", action="store_true", help="attack: the nodes' key in open mode, to see what it allows")
     b.add_argument("--quick", action="store_true", help="each workload's code path with small sizes and short "
                                                          "timings, to check that it runs (the figures mean nothing)")

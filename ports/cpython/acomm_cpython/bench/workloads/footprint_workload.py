@@ -24,6 +24,10 @@
 #       and rebroadcasts (footprint_minute.ROUTING_CONFIG);
 #       heap_routing_extra_{frozen,romfs}_cortex_m_bytes: routing's cost,
 #       the routing figure less the plain one of the same run
+#   heap_min_romfs_names_cortex_m[_routing]_bytes   the ROMFS figures on
+#       cm3-names, a firmware made for the ROMFS buoy: it freezes the names
+#       its modules use (tools/qstrnames.py), which the stock firmware's
+#       import adds to the heap; the modules stay in the ROMFS image
 #   heap_after_imports_* / heap_after_build_*   gc.mem_alloc() once every
 #       module the buoy runs is imported / once its node is built (roomy heap)
 #   heap_peak_*   gc.mem_alloc() at its highest over the minute, garbage
@@ -160,7 +164,8 @@ def _heap_min_32(trial, label, emit, name, extra=(), figures=None):
 VERBOSE = False
 
 # --only NAME: each group of figures and what it needs
-GROUPS = ("frozen_cortex_m", "routing_cortex_m", "loaded_cortex_m", "romfs_cortex_m", "romfs_routing_cortex_m", "mpy_cortex_m", "frozen_i386", "romfs_i386", "mpy_i386",
+GROUPS = ("frozen_cortex_m", "routing_cortex_m", "loaded_cortex_m", "romfs_cortex_m", "romfs_routing_cortex_m",
+          "romfs_names_cortex_m", "mpy_cortex_m", "frozen_i386", "romfs_i386", "mpy_i386",
           "flash_text", "flash_writes", "boot_rp2040", "frozen_rp2040", "loaded_rp2040", "mpy_rp2040", "unix64")
 
 
@@ -212,6 +217,16 @@ def _group(name, emit, ctx):
         else:
             trial = lambda h: run_qemu(elf, h, flash=st.lfs())  # noqa: E731
         _heap_min_32(trial, name, emit, name, ("code", "after_build"), figs)
+    elif name == "romfs_names_cortex_m":
+        # the same ROMFS image on a firmware made for it: cm3-names freezes the
+        # names the buoy's modules use (tools/qstrnames.py), so importing them
+        # adds no qstrs to the heap; the modules stay in ROMFS
+        elf = _fw("cm3-names")
+        st = ctx.setdefault("armv7m", Staged(ctx["tmp"], "armv7m"))
+        _heap_min_32(lambda h: run_qemu(elf, h, rom=st.rom()), name, emit, "romfs_names_cortex_m",
+                     ("code", "after_build"))
+        _heap_min_32(lambda h: run_qemu(elf, h, rom=st.rom(), routing=True), name, emit,
+                     "romfs_names_cortex_m_routing", ("code", "after_build"))
     elif name in ("frozen_i386", "romfs_i386", "mpy_i386"):
         if micropython_i386() is None:
             raise RuntimeError("no build/firmware/micropython-i386: build it with python3 tools/firmware.py build")
