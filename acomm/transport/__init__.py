@@ -491,9 +491,13 @@ class Transport:
             # (flag R): their life, the header's last 2 bytes, is the one left now, stamped again
             # each time fragment 0 goes, so that the relay, counting from its arrival, misses only
             # this copy's wait and flight, not the rounds lost before it
-            k = 1 + sg.decode_packet_header(data[1:]).size
-            v = life if life < 0xFFFF else 0xFFFF
-            data = data[: k - 2] + bytes((v >> 8, v & 0xFF)) + data[k:]
+            try:
+                k = 1 + sg.decode_packet_header(data[1:]).size
+            except DecodeError:
+                k = 0  # a header cut short by a tiny fragment: the receiver refuses it anyway
+            if k:
+                v = life if life < 0xFFFF else 0xFFFF
+                data = data[: k - 2] + bytes((v >> 8, v & 0xFF)) + data[k:]
         poll = sg.is_poll(head)
         # confirmed by the modem's own delivery report? (acomm.transport.delivery)
         rep = p.out.reports and p.out.report_wanted(len(data), poll)
