@@ -7,7 +7,11 @@
 #     counter (3 bytes, big-endian: key phase bit, then 23 bits)  tag
 #
 # tag = HMAC-SHA256(key, 0x02 type src dst seq epoch(4) counter payload)
-# [:tag_len], with dst 255 for broadcast. The addresses and the frame type
+# [:tag_len], with dst 255 for broadcast. When src or dst is a node id of
+# 256 or more (acomm.frame.addr_bytes), both take 2 bytes, big-endian, and
+# the first byte is 0x04 instead (0x05 for 0x03 below): never the input of
+# another frame, so 300 is never taken for 44, the id it shares modulo 256.
+# The addresses and the frame type
 # are covered whether the link carries them in acomm's raw header or the
 # modem carries them (elided form), so a tag heard towards one node is no
 # good towards another. The sequence number is covered too: the link's
@@ -70,7 +74,10 @@ _CTR_MAX = 0x7FFFFF
 _PHASE = 0x800000
 _WINDOW = 32
 _MAGIC = b"AK2"
-_MAX_SOURCES = 255  # one per node id
+# the sources whose counters a node keeps: all the one-byte ids. A node that
+# has heard this many (ids of 256 and more: a network of more than 254
+# nodes) refuses a new one's sealed frames rather than forget a window
+_MAX_SOURCES = 255
 _NONCE_LEN = 8
 # key commands: b"\xa5K", op, phase, then for install an 8-byte nonce
 KEY_CMD = b"\xa5K"
@@ -278,9 +285,11 @@ class Auth:
         if key is None:
             self.stats["no_key"] += 1
             return None if tag is None else False
-        if src > 255 or dst > 255:
-            raise AuthError("sealing covers node ids 0..254")  # as _tag
-        t = key.digest(bytes((3, 1, src, dst, seq & 0xFF)), _b4(e), _b3(ctr))[: self.tag_len]
+        if src > 255 or dst > 255:  # as _tag
+            head = bytes((5, 1, src >> 8, src & 0xFF, dst >> 8, dst & 0xFF, seq & 0xFF))
+        else:
+            head = bytes((3, 1, src, dst, seq & 0xFF))
+        t = key.digest(head, _b4(e), _b3(ctr))[: self.tag_len]
         if tag is None:
             return t
         if same(t, tag):
@@ -298,7 +307,7 @@ class Auth:
         st = self._rx.get(src)
         if st is None:
             if len(self._rx) >= _MAX_SOURCES:
-                return False  # cannot happen with node ids 0..254
+                return False  # only with ids of 256 and more (_MAX_SOURCES)
             self._rx[src] = [c, 1, e]
             return True
         hi, bits = st[0], st[1]
@@ -314,22 +323,24 @@ class Auth:
         return True
 
     def _tag(self, key, ftype, src, dst, seq, ep, ctr, payload):
-        # Sealing covers the one-byte node ids (0..254, 255 for broadcast): the
-        # tag's input and the counter file hold a byte per id. A frame to or
-        # from a wider id (acomm.frame.addr_bytes) is refused, not sealed with
-        # an id that another node shares modulo 256 (MicroPython's bytes()
-        # would keep the low byte without a word)
-        if src > 255 or (dst is not None and dst > 255):
-            raise AuthError("sealing covers node ids 0..254")
-        head = bytes((2, ftype & 0xFF, src, 255 if dst is None else dst, seq & 0xFF))
+        # one-byte ids as they always were; an id of 256 or more makes both
+        # 2 bytes under another first byte (MicroPython's bytes() would keep
+        # a wide id's low byte without a word: the id 44 shares with 300)
+        d = 255 if dst is None else dst
+        if src > 255 or d > 255:
+            head = bytes((4, ftype & 0xFF, src >> 8, src & 0xFF, d >> 8, d & 0xFF, seq & 0xFF))
+        else:
+            head = bytes((2, ftype & 0xFF, src, d, seq & 0xFF))
         return key.digest(head, ep, ctr, payload)[: self.tag_len]
 
     # -- the counter file --------------------------------------------------------
     # "AK2", phase (1), epoch (4), reserved (3), then for each phase a flag
     # (0: as at start, the base key in phase 0 and an add_key() one in 1;
     # 1: derived, the 8-byte nonce follows; 2: dropped), then n (1) and n x
-    # (source (1), epoch (4), highest (3)). Written to path + ".new" and
-    # renamed over path, so a power cut leaves the old file or the new one.
+    # (source (1), epoch (4), highest (3)) for the one-byte sources; then,
+    # only when there are sources of 256 and more, m (1) and m x (source (2),
+    # epoch (4), highest (3)). Written to path + ".new" and renamed over
+    # path, so a power cut leaves the old file or the new one.
     def _save(self):
         self._rx_saved = 0
         if self.path is None:
@@ -343,11 +354,18 @@ class Auth:
                 out += self._nonces[p]
             else:
                 out.append(2 if self._keys[p] is None else 0)
-        out.append(len(self._rx))
+        wide = [src for src in self._rx if src > 255]
+        out.append(len(self._rx) - len(wide))
         for src in self._rx:
-            st = self._rx[src]
-            out.append(src & 0xFF)
-            out += _b4(st[2]) + _b3(st[0])
+            if src < 256:
+                st = self._rx[src]
+                out.append(src)
+                out += _b4(st[2]) + _b3(st[0])
+        if wide:
+            out.append(len(wide))
+            for src in wide:
+                st = self._rx[src]
+                out += bytes((src >> 8, src & 0xFF)) + _b4(st[2]) + _b3(st[0])
         tmp = self.path + ".new"
         with open(tmp, "wb") as f:
             f.write(out)
@@ -363,7 +381,7 @@ class Auth:
         for p in (self.path, self.path + ".new"):
             try:
                 with open(p, "rb") as f:
-                    data = f.read(16 + 2 * _NONCE_LEN + 8 * _MAX_SOURCES)
+                    data = f.read(17 + 2 * _NONCE_LEN + 9 * _MAX_SOURCES)
                 break
             except OSError:
                 continue
@@ -404,7 +422,9 @@ class Auth:
                 return False
         count = data[o]
         o += 1
-        if n != o + 8 * count or dropped[data[3]]:
+        w = o + 8 * count  # where the sources of 256 and more start, if any
+        m = data[w] if n > w else 0
+        if (n != w and n != w + 1 + 9 * m) or not (n == w or m) or dropped[data[3]]:
             return False  # not whole, or the phase in use dropped
         self.phase = data[3]
         self.epoch = _u(data, 4, 4)
@@ -419,4 +439,7 @@ class Auth:
         for i in range(count):
             k = o + 8 * i
             self._rx[data[k]] = [_u(data, k + 5, 3), 0xFFFFFFFF, _u(data, k + 1, 4)]
+        for i in range(m):
+            k = w + 1 + 9 * i
+            self._rx[_u(data, k, 2)] = [_u(data, k + 6, 3), 0xFFFFFFFF, _u(data, k + 2, 4)]
         return True

@@ -2,9 +2,10 @@
 # and for the others 0xFF then the id in 2 bytes (acomm.frame.addr_bytes), in
 # the frame header, adverts, relay fields, route control and floods, and in
 # the store's records and the memory of delivered packets. Here a routed
-# chain of such nodes on a packet modem that carries raw frames, and each
-# place an id of 256 or more must not be confused with the one-byte id it
-# shares modulo 256 (300 and 44).
+# chain of such nodes on a packet modem that carries raw frames, open and
+# sealed, and each place an id of 256 or more must not be confused with the
+# one-byte id it shares modulo 256 (300 and 44): the store, the memory of
+# packets done, the tag and the counter file.
 from acomm import frame as fr
 from acomm.errors import AuthError, DecodeError
 from acomm.events import EV_PACKET
@@ -26,11 +27,13 @@ def _wall(w):
     return lambda: w.now() // 1000
 
 
-def _chain(stores=None):
+def _chain(stores=None, key=None):
     w = World(seed=3, channel=Channel(seed=3, loss_curve=RANGE))
     ns = []
     for i, nid in enumerate(IDS):
         sn = w.add("n%d" % nid, nid, "bpsk", position=(150.0 * i, 0.0, 10.0), link_opts={"advert_period_ms": 30000})
+        if key is not None:
+            sn.node.set_auth(Auth(key, 4), strict=True)
         st = None if stores is None else stores[i]
         sn.t = Transport.of(sn.node, store=st, wall=_wall(w), routing={"search_ms": 30000})
         ns.append(sn)
@@ -121,7 +124,7 @@ def test_the_store_and_the_done_memory_tell_300_from_44():
     assert len(t2._done_wide) == 7 * 32 and t2._is_done(1039, 39) and not t2._is_done(300, 9)
 
 
-def test_adverts_relay_fields_and_sealing_with_wide_ids():
+def test_adverts_and_relay_fields_with_wide_ids():
     assert encode_advert(300, 60000) == b"\xff\x01\x2c\x0f"
     assert decode_advert(encode_advert(300, 60000)) == (300, 60000)
     assert decode_advert(b"\x2c\x0f") == (44, 60000)
@@ -131,11 +134,84 @@ def test_adverts_relay_fields_and_sealing_with_wide_ids():
     assert len(h) == len(sg.packet_header(5, 100, False, (44, 2, 3, 600))) + 2
     assert sg.decode_packet_header(h).relay == (300, 2, 3, 600)
     raises(DecodeError, sg.decode_packet_header, h[:6])
-    # sealing covers the one-byte ids: a frame from or to 300 is refused, not
-    # sealed under the id it shares with 44
-    auth = Auth(b"k" * 16, 4)
-    raises(AuthError, auth.seal, fr.DATA, 300, 2, b"x")
-    raises(AuthError, auth.seal, fr.DATA, 2, 300, b"x")
-    assert auth.seal(fr.DATA, 44, 2, b"x")
-    raises(AuthError, auth.ack_tag, 300, 2, 1, 5)
-    raises(AuthError, auth.ack_tag, 2, 300, 1, 5)
+
+
+def test_a_frame_sealed_by_300_is_never_taken_for_one_by_44():
+    key = b"k" * 16
+    a, b = Auth(key, 4), Auth(key, 4)
+    body = a.seal(fr.DATA, 300, 2, b"x", seq=9)
+    raises(AuthError, b.open, fr.DATA, 44, 2, body, 9)  # its low byte
+    assert b.open(fr.DATA, 300, 2, body, 9)[0] == b"x"
+    raises(AuthError, b.open, fr.DATA, 300, 2, body, 9)  # a replay
+    # to 300 (and to everyone, from 300), never to 44
+    body = a.seal(fr.DATA, 2, 300, b"y", seq=1)
+    raises(AuthError, b.open, fr.DATA, 2, 44, body, 1)
+    assert b.open(fr.DATA, 2, 300, body, 1)[0] == b"y"
+    body = a.seal(fr.CONTROL, 300, None, b"z")
+    raises(AuthError, b.open, fr.CONTROL, 44, None, body)
+    assert b.open(fr.CONTROL, 300, None, body)[0] == b"z"
+    # the sealed ACK binds the wide ids too; a narrow pair's tag is as it was
+    assert a.ack_tag(2, 300, 1, 5) != a.ack_tag(2, 44, 1, 5) != a.ack_tag(300, 2, 1, 5)
+    assert b.ack_tag(300, 2, 1, 5, a.ack_tag(300, 2, 1, 5)) and not b.ack_tag(44, 2, 1, 5, a.ack_tag(300, 2, 1, 5))
+
+
+def test_the_counter_file_keeps_wide_sources_apart_through_a_restart():
+    import os
+
+    path = "wide_ids_counters.bin"
+    for p in (path, path + ".new"):
+        try:
+            os.remove(p)
+        except OSError:
+            pass
+    key = b"k" * 16
+    try:
+        sender = Auth(key, 4)
+        rx = Auth(key, 4, path=path, reserve=1)
+        frames = dict((src, sender.seal(fr.DATA, src, 2, b"m%d" % src)) for src in (300, 44, 65534))
+        for src in (300, 44, 65534):
+            assert rx.open(fr.DATA, src, 2, frames[src])[0] == b"m%d" % src
+        rx.commit()
+        rx2 = Auth(key, 4, path=path)  # a restart: every window survives, 300 apart from 44
+        assert sorted(rx2._rx) == [44, 300, 65534] and rx2.stats["epochs"] == 0
+        for src in (300, 44, 65534):
+            raises(AuthError, rx2.open, fr.DATA, src, 2, frames[src])
+        # a file with one-byte sources only is laid out as before: no section for wide ones
+        rx3 = Auth(key, 4, path=path, reserve=1)
+        del rx3._rx[300], rx3._rx[65534]
+        rx3._save()
+        with open(path, "rb") as f:
+            data = f.read()
+        assert len(data) == 11 + 2 + 1 + 8 and Auth(key, 4, path=path).stats["epochs"] == 0
+        # a wide section cut short is a damaged file: a new epoch, never a window half read
+        rx2._save()
+        with open(path, "rb") as f:
+            data = f.read()
+        with open(path, "wb") as f:
+            f.write(data[:-1])
+        assert Auth(key, 4, path=path).stats["epochs"] == 1
+    finally:
+        for p in (path, path + ".new"):
+            try:
+                os.remove(p)
+            except OSError:
+                pass
+
+
+def test_a_sealed_network_of_wide_ids_in_strict_mode():
+    # every node keyed and strict: routed packets, route control and a flood go sealed
+    # between ids of two bytes, and nothing is refused at any link
+    w, ns = _chain(key=b"s" * 16)
+    first, last = ns[0], ns[3]
+    ns[2].t.flood(w.now(), b"sealed flood")
+    w.run(90000)
+    for sn in ns:
+        assert _got(sn) == ([] if sn is ns[2] else [("n65534", b"sealed flood")]), sn.node.name
+        del sn.events[:]
+    first.t.send(w.now(), "n1000", b"sealed, three hops", 3600)
+    assert w.run(400000, until=lambda: _got(last)), first.t.stats
+    assert _got(last) == [("n300", b"sealed, three hops")]
+    for sn in ns:
+        link = sn.node.link("acoustic")
+        assert link.framing.auth.stats["opened"] > 0 and link.framing.auth.stats["bad_tag"] == 0
+        assert link.stats["rx_bad"] == 0 and link.stats.get("unauthed", 0) == 0, (sn.node.name, link.stats)

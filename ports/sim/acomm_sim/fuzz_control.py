@@ -145,7 +145,7 @@ def target():
 def file_target(tmpdir):
     # Target "auth.file": the counter file (acomm.frame.auth) as power cuts and
     # flash rot leave it. Corpus: files Auth wrote (derived and dropped key
-    # phases, sources with epochs). Oracle, beyond "only acomm errors": the
+    # phases, sources with epochs, ids of 256 and more among them). Oracle, beyond "only acomm errors": the
     # node starts whatever the file holds (a damaged one means a new epoch),
     # and then seals a frame that a peer holding its key phases opens.
     import os
@@ -172,7 +172,8 @@ def file_target(tmpdir):
         if i % 3 == 2:
             a.key_command(key_command(OP_DROP, 0))
         for k in range(rng.below(5)):
-            src = 2 + rng.below(20)
+            # one-byte sources, and ids of 256 and more (their section of the file) in half the files
+            src = 2 + rng.below(20) if i % 2 or rng.chance(0.5) else 256 + rng.below(65279)
             peer.epoch = rng.below(1 << 31)
             a.open(fr.ADVERT, src, None, peer.seal(fr.ADVERT, src, None, b"\x02\x01", 0, True))
         a.commit()
