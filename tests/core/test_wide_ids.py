@@ -17,7 +17,7 @@ from acomm.transport.memorystore import MemoryStore
 from acomm.transport.packetstore import PacketStore, key_of
 from acomm_sim.channel import Channel
 from acomm_sim.world import World
-from checks import raises
+from checks import TempDir, raises
 
 RANGE = ((0.0, 0.0), (200.0, 0.0), (201.0, 1.0))  # heard within 200 m, never beyond
 IDS = (300, 44, 65534, 1000)  # a chain; 300 and 44 share their low byte
@@ -156,16 +156,9 @@ def test_a_frame_sealed_by_300_is_never_taken_for_one_by_44():
 
 
 def test_the_counter_file_keeps_wide_sources_apart_through_a_restart():
-    import os
-
-    path = "wide_ids_counters.bin"
-    for p in (path, path + ".new"):
-        try:
-            os.remove(p)
-        except OSError:
-            pass
     key = b"k" * 16
-    try:
+    with TempDir() as d:
+        path = d.file("wide.auth")
         sender = Auth(key, 4)
         rx = Auth(key, 4, path=path, reserve=1)
         frames = dict((src, sender.seal(fr.DATA, src, 2, b"m%d" % src)) for src in (300, 44, 65534))
@@ -190,12 +183,6 @@ def test_the_counter_file_keeps_wide_sources_apart_through_a_restart():
         with open(path, "wb") as f:
             f.write(data[:-1])
         assert Auth(key, 4, path=path).stats["epochs"] == 1
-    finally:
-        for p in (path, path + ".new"):
-            try:
-                os.remove(p)
-            except OSError:
-                pass
 
 
 def test_a_sealed_network_of_wide_ids_in_strict_mode():
