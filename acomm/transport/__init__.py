@@ -129,6 +129,23 @@ def _wall_default():
     return int(time.time())
 
 
+
+def _restamp(data, life):
+    # Fragment 0 (its index byte, then the packet header) of a packet with relay fields (flag
+    # R) with their life left, the header's last 2 bytes, set to life: stamped again each time
+    # fragment 0 is handed to the link, so that the relay, counting from its arrival, misses
+    # only this copy's wait and flight, not the rounds lost before it. Out of Transport._request
+    # on purpose: that function's frame is already too big for MicroPython's stack and is
+    # allocated on the heap at each call, and more locals and a try block there raised the
+    # routing buoy's heap_min by 512 bytes.
+    try:
+        k = 1 + sg.decode_packet_header(data[1:]).size
+    except DecodeError:
+        return data  # a header cut short by a tiny fragment: the receiver refuses it anyway
+    if life > 0xFFFF:
+        life = 0xFFFF
+    return data[: k - 2] + bytes((life >> 8, life & 0xFF)) + data[k:]
+
 class Transport:
     _done_wide = None  # _memory(): made by the first origin of 256 or more
     def __init__(self, node_id, names, links, next_id, emit, store=None, routes=None, wall=None, max_packet=65536,
@@ -487,17 +504,7 @@ class Transport:
             # from another epoch, would have the link refuse every fragment)
             life = _MAX_LIFESPAN_MS // 1000
         if not index and len(data) > 1 and data[1] & 0x80:
-            # fragment 0 (its index byte, then the packet header) of a packet with relay fields
-            # (flag R): their life, the header's last 2 bytes, is the one left now, stamped again
-            # each time fragment 0 goes, so that the relay, counting from its arrival, misses only
-            # this copy's wait and flight, not the rounds lost before it
-            try:
-                k = 1 + sg.decode_packet_header(data[1:]).size
-            except DecodeError:
-                k = 0  # a header cut short by a tiny fragment: the receiver refuses it anyway
-            if k:
-                v = life if life < 0xFFFF else 0xFFFF
-                data = data[: k - 2] + bytes((v >> 8, v & 0xFF)) + data[k:]
+            data = _restamp(data, life)
         poll = sg.is_poll(head)
         # confirmed by the modem's own delivery report? (acomm.transport.delivery)
         rep = p.out.reports and p.out.report_wanted(len(data), poll)
