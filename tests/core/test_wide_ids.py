@@ -45,6 +45,19 @@ def _got(sn):
     return [(e[1], e[3]) for e in sn.events if e[0] == EV_PACKET]
 
 
+def _flood_then_send(w, ns, flood, data):
+    # 65534 floods: every other node gets it once; then 300 sends data 3 hops to 1000
+    first, last = ns[0], ns[3]
+    ns[2].t.flood(w.now(), flood)
+    w.run(90000)
+    for sn in ns:
+        assert _got(sn) == ([] if sn is ns[2] else [("n65534", flood)]), sn.node.name
+        del sn.events[:]
+    first.t.send(w.now(), "n1000", data, 3600)
+    assert w.run(400000, until=lambda: _got(last)), first.t.stats
+    assert _got(last) == [("n300", data)]
+
+
 def test_a_routed_chain_of_wide_ids_carries_packets_and_floods():
     w, ns = _chain()
     first, last = ns[0], ns[3]
@@ -53,14 +66,7 @@ def test_a_routed_chain_of_wide_ids_carries_packets_and_floods():
         assert sorted(d.nodes) == sorted(x for x in IDS if abs(IDS.index(x) - ns.index(sn)) == 1)
     # a flood from 65534 reaches every other node once (a flood is not acknowledged: on a
     # quiet channel, before the packets, no copy is lost to a collision)
-    ns[2].t.flood(w.now(), b"all surface")
-    w.run(90000)
-    for sn in ns:
-        assert _got(sn) == ([] if sn is ns[2] else [("n65534", b"all surface")]), sn.node.name
-        del sn.events[:]
-    first.t.send(w.now(), "n1000", b"three hops by ids of two bytes", 3600)
-    assert w.run(400000, until=lambda: _got(last)), first.t.stats
-    assert _got(last) == [("n300", b"three hops by ids of two bytes")]
+    _flood_then_send(w, ns, b"all surface", b"three hops by ids of two bytes")
     assert first.t.router.routing.table.lookup(w.now(), 1000)[0] == 44
     # the relays learned the way back to 300, not to 44 (its low byte)
     assert ns[2].t.router.routing.table.lookup(w.now(), 300)[0] == 44
@@ -189,15 +195,7 @@ def test_a_sealed_network_of_wide_ids_in_strict_mode():
     # every node keyed and strict: routed packets, route control and a flood go sealed
     # between ids of two bytes, and nothing is refused at any link
     w, ns = _chain(key=b"s" * 16)
-    first, last = ns[0], ns[3]
-    ns[2].t.flood(w.now(), b"sealed flood")
-    w.run(90000)
-    for sn in ns:
-        assert _got(sn) == ([] if sn is ns[2] else [("n65534", b"sealed flood")]), sn.node.name
-        del sn.events[:]
-    first.t.send(w.now(), "n1000", b"sealed, three hops", 3600)
-    assert w.run(400000, until=lambda: _got(last)), first.t.stats
-    assert _got(last) == [("n300", b"sealed, three hops")]
+    _flood_then_send(w, ns, b"sealed flood", b"sealed, three hops")
     for sn in ns:
         link = sn.node.link("acoustic")
         assert link.framing.auth.stats["opened"] > 0 and link.framing.auth.stats["bad_tag"] == 0
