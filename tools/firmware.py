@@ -77,7 +77,7 @@ JOBS = str(max(2, os.cpu_count() or 2))
 # name -> (port, manifest parts); parts: "boot" (the qemu board's
 # _boot.py), "asyncio", "full" (ports/micropython/manifest.py), "harness"
 # (tools/lockstep), "board:NAME" (ports/micropython/manifests/NAME.py), or
-# "names:NAME" (the names that board's modules use, tools/qstrnames.py)
+# "names:BOARD" (the names the modules of boards/BOARD use, tools/qstrnames.py)
 PRODUCTS = {
     "cm3-plain": ("qemu", ("boot", "asyncio")),
     "cm3-buoy": ("qemu", ("boot", "board:buoy_pico")),
@@ -265,9 +265,9 @@ def _manifest(parts, work):
             sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
             import qstrnames
 
-            files = qstrnames.manifest_files(os.path.join(ROOT, "ports", "micropython", "manifests", p[6:] + ".py"))
+            names = qstrnames.board_names(qstrnames.board_files(p[6:]), os.path.join(OUT, "mpy-cross"))
             with open(os.path.join(work, "acomm_names.py"), "w") as f:
-                f.write(qstrnames.names_module(qstrnames.board_names(files, os.path.join(OUT, "mpy-cross"))))
+                f.write(qstrnames.names_module(names))
             lines.append("freeze(%r, %r)" % (work, "acomm_names.py"))
         else:
             raise ValueError(p)

@@ -11,11 +11,13 @@
 # stay in ROMFS, where `mpremote romfs deploy` replaces them without
 # reflashing. A module changed later pays RAM only for names it adds.
 #
-#   python3 tools/qstrnames.py MANIFEST MPY_CROSS OUT.py [ARCH]
+#   python3 tools/qstrnames.py BOARD MPY_CROSS OUT.py [ARCH]   (BOARD: a folder under boards/)
 import os
 import subprocess
 import sys
 import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # strings the parser interns (py/parse.c: MICROPY_ALLOC_PARSE_INTERN_STRING_LEN):
 # a longer literal would be frozen as a string object, not as a name
@@ -26,36 +28,16 @@ _KEYWORDS = frozenset(("False", "None", "True", "and", "as", "assert", "async", 
                        "return", "try", "while", "with", "yield"))
 
 
-def manifest_files(manifest):
-    """[(path, module name)] of the .py files a board manifest's package() and module() calls
-    freeze (include() is not followed)."""
-    here = os.path.dirname(os.path.abspath(manifest))
-    out = []
+def board_files(board):
+    """[(path, module name)] of the modules board (a folder under boards/) runs: its import
+    closure as `acomm flash` computes and names it (acomm_cpython.board.boardfiles)."""
+    for p in (os.path.join(ROOT, "ports", "cpython"), os.path.join(ROOT, "ports", "micropython"), ROOT):
+        if p not in sys.path:
+            sys.path.insert(0, p)
+    from acomm_cpython.board import boardfiles
 
-    def package(name, files=None, base_path=".", **kw):
-        base = os.path.join(here, base_path, name)
-        out.extend((os.path.join(base, f), _module_name(name + "/" + f)) for f in files)
-
-    def module(name, base_path=".", **kw):
-        out.append((os.path.join(here, base_path, name), _module_name(name)))
-
-    def ignore(*a, **kw):
-        pass
-
-    with open(manifest) as f:
-        code = f.read()
-    exec(compile(code, manifest, "exec"), {"package": package, "module": module, "include": ignore,
-                                            "metadata": ignore, "require": ignore, "freeze": ignore})
-    return out
-
-
-def _module_name(rel):
-    # as acomm flash names each compiled module's source (its qstr table's first entry):
-    # "acomm/link/__init__.py" -> "acomm.link"
-    parts = rel[:-3].split("/")
-    if parts[-1] == "__init__":
-        parts.pop()
-    return ".".join(parts)
+    mods = boardfiles.modules(os.path.join(ROOT, "boards", board), root=ROOT)
+    return [(mods[name], name) for name in sorted(mods)]
 
 
 def _uint(b, i):
@@ -89,8 +71,9 @@ def mpy_qstrs(data):
 
 
 def board_names(files, mpy_cross, arch="armv7m"):
-    """Every name the files' compiled code uses, sorted. files: [(path, module name)]; arch:
-    mpy-cross -march (viper code needs one)."""
+    """Every name the files' compiled code uses, sorted. files: [(path, module name)], each
+    compiled under its module name as `acomm flash` does (that name is its qstr table's first
+    entry); arch: mpy-cross -march (viper code needs one)."""
     names = set()
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "m.mpy")
@@ -127,9 +110,9 @@ def names_module(names, per_def=200):
 
 
 def main(argv):
-    manifest, mpy_cross, out = argv[:3]
+    board, mpy_cross, out = argv[:3]
     with open(out, "w") as f:
-        f.write(names_module(board_names(manifest_files(manifest), mpy_cross, *argv[3:])))
+        f.write(names_module(board_names(board_files(board), mpy_cross, *argv[3:])))
     return 0
 
 

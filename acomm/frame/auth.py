@@ -422,10 +422,16 @@ class Auth:
                 return False
         count = data[o]
         o += 1
-        w = o + 8 * count  # where the sources of 256 and more start, if any
-        m = data[w] if n > w else 0
-        if (n != w and n != w + 1 + 9 * m) or not (n == w or m) or dropped[data[3]]:
-            return False  # not whole, or the phase in use dropped
+        w = o + 8 * count  # where the section of sources of 256 and more starts, if any
+        m = 0
+        if n < w:
+            return False  # not whole
+        if n > w:  # that section: m (never 0), then m entries
+            m = data[w]
+            if not m or n != w + 1 + 9 * m:
+                return False  # not whole
+        if dropped[data[3]]:
+            return False  # the phase in use dropped
         self.phase = data[3]
         self.epoch = _u(data, 4, 4)
         self._reserved = _u(data, 8, 3)

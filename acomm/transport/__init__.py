@@ -129,7 +129,6 @@ def _wall_default():
     return int(time.time())
 
 
-
 def _restamp(data, life):
     # Fragment 0 (its index byte, then the packet header) of a packet with relay fields (flag
     # R) with their life left, the header's last 2 bytes, set to life: stamped again each time
@@ -145,6 +144,7 @@ def _restamp(data, life):
     if life > 0xFFFF:
         life = 0xFFFF
     return data[: k - 2] + bytes((life >> 8, life & 0xFF)) + data[k:]
+
 
 class Transport:
     _done_wide = None  # _memory(): made by the first origin of 256 or more

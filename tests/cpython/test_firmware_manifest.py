@@ -146,15 +146,14 @@ def test_the_names_module_names_what_it_can_and_leaves_out_what_it_cannot(tmp_pa
     assert {"depth_m", "x%d", "acomm.transport.routing", "_private", "class"} <= got
     # a long string is frozen as a string object, not a name
     assert "lifespan over" not in got
-    # and a board manifest's files come with the module names acomm flash gives them
-    files = qstrnames.manifest_files(os.path.join(ROOT, "ports", "micropython", "manifests", "buoy_pico.py"))
+    # and a board's files come with the module names acomm flash gives them
+    files = qstrnames.board_files("buoy_pico")
     assert (os.path.join(ROOT, "acomm", "transport", "routing.py"), "acomm.transport.routing") in [
         (os.path.normpath(p), n) for p, n in files]
     assert ("acomm.transport",) == tuple(n for p, n in files if p.endswith(os.path.join("transport", "__init__.py")))
     # the command line: the buoy's names module, which compiles and names the router's methods
     cli = tmp_path / "acomm_names.py"
-    manifest = os.path.join(ROOT, "ports", "micropython", "manifests", "buoy_pico.py")
-    subprocess.run([sys.executable, os.path.join(ROOT, "tools", "qstrnames.py"), manifest, mc, str(cli)], check=True)
+    subprocess.run([sys.executable, os.path.join(ROOT, "tools", "qstrnames.py"), "buoy_pico", mc, str(cli)], check=True)
     subprocess.run([mc, "-o", str(out), str(cli)], check=True)
     got = set(qstrnames.mpy_qstrs(out.read_bytes()))
     assert {"hop_failed", "overheard", "acomm.transport.routing"} <= got and len(got) > 1000

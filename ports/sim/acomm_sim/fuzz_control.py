@@ -145,9 +145,10 @@ def target():
 def file_target(tmpdir):
     # Target "auth.file": the counter file (acomm.frame.auth) as power cuts and
     # flash rot leave it. Corpus: files Auth wrote (derived and dropped key
-    # phases, sources with epochs, ids of 256 and more among them). Oracle, beyond "only acomm errors": the
-    # node starts whatever the file holds (a damaged one means a new epoch),
-    # and then seals a frame that a peer holding its key phases opens.
+    # phases, sources with epochs, ids of 256 and more among them). Oracle,
+    # beyond "only acomm errors": the node starts whatever the file holds (a
+    # damaged one means a new epoch), and then seals a frame that a peer
+    # holding its key phases opens.
     import os
 
     from acomm.frame.auth import OP_DROP, OP_INSTALL, OP_USE, key_command
